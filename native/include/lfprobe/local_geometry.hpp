@@ -1,0 +1,38 @@
+// Per-point surface geometry estimated from the k nearest neighbours (nanoflann): the normal
+// (PCA, the direction of least spread) oriented toward the scanner that saw the point, and the
+// local point spacing that sizes the point's splat when it is baked into a probe.
+#pragma once
+
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "lfprobe/point_cloud.hpp"
+#include "lfprobe/progress.hpp"
+
+namespace lfprobe {
+
+struct LocalGeometryOptions {
+    int normal_neighbours = 12;    // k for the PCA normal
+    int spacing_neighbours = 6;    // the spacing is the mean distance to this many neighbours
+    bool keep_file_normals = true; // use normals the file carries instead of estimating
+};
+
+struct LocalGeometry {
+    std::vector<glm::vec3> normals; // unit; oriented toward the scanner where it is known
+    std::vector<float> spacing;     // mean distance to the nearest neighbours, metres
+    // Per point: true when the normal's sign is known (the scan has a scanner position or the
+    // file gave normals); false means the sign is arbitrary and a baker orients it toward
+    // its probe.
+    std::vector<std::uint8_t> oriented;
+};
+
+[[nodiscard]] LocalGeometry estimate_local_geometry(const PointCloud& cloud,
+                                                    const LocalGeometryOptions& options,
+                                                    Progress* progress = nullptr);
+
+// The eigenvector of the smallest eigenvalue of a symmetric 3×3 matrix (Jacobi rotations;
+// exact enough for PCA and free of the cancellation of closed-form cubic solutions).
+[[nodiscard]] glm::vec3 smallest_eigenvector(const double covariance[3][3]);
+
+} // namespace lfprobe

@@ -1,0 +1,119 @@
+// The octahedral map of DESIGN.md §3, the one mapping between directions and texels that every
+// part of lfprobe uses. Z is the fold axis; the upper hemisphere fills the inner diamond, the
+// lower hemisphere the four outer triangles. Texel (x, y) is pixel column x, scanline y.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include <glm/geometric.hpp>
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "lfprobe/error.hpp"
+
+namespace lfprobe::oct {
+
+// s(a) of DESIGN.md: -0.0 maps to +1 (copysign and signbit would give -1).
+[[nodiscard]] constexpr float sign_not_zero(float a) {
+    return a >= 0.0f ? 1.0f : -1.0f;
+}
+
+// Direction (any length > 0, finite) to map coordinates uv in [0, 1]².
+// Precondition: finite and not the zero vector; encode_checked tests it.
+[[nodiscard]] inline glm::vec2 encode(const glm::vec3& d) {
+    const float l1 = std::abs(d.x) + std::abs(d.y) + std::abs(d.z);
+    glm::vec2 p{d.x / l1, d.y / l1};
+    if (d.z < 0.0f) {
+        p = glm::vec2{(1.0f - std::abs(p.y)) * sign_not_zero(p.x),
+                      (1.0f - std::abs(p.x)) * sign_not_zero(p.y)};
+    }
+    return p * 0.5f + 0.5f;
+}
+
+// Map coordinates uv (any real numbers; meaningful in [0, 1]²) to a unit direction.
+[[nodiscard]] inline glm::vec3 decode(const glm::vec2& uv) {
+    const glm::vec2 p = uv * 2.0f - 1.0f;
+    glm::vec3 d{p.x, p.y, 1.0f - std::abs(p.x) - std::abs(p.y)};
+    if (d.z < 0.0f) {
+        d.x = (1.0f - std::abs(p.y)) * sign_not_zero(p.x);
+        d.y = (1.0f - std::abs(p.x)) * sign_not_zero(p.y);
+    }
+    return glm::normalize(d);
+}
+
+// True when encode() may be called on d.
+[[nodiscard]] inline bool is_valid_direction(const glm::vec3& d) {
+    return std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z) &&
+           (d.x != 0.0f || d.y != 0.0f || d.z != 0.0f);
+}
+
+// encode() that rejects NaN, infinite and zero directions with an InputError.
+[[nodiscard]] inline glm::vec2 encode_checked(const glm::vec3& d) {
+    if (!is_valid_direction(d)) {
+        throw InputError("octahedral encode: expected a finite non-zero direction, got (" +
+                         std::to_string(d.x) + ", " + std::to_string(d.y) + ", " +
+                         std::to_string(d.z) + ")");
+    }
+    return encode(d);
+}
+
+struct Texel {
+    int x = 0;
+    int y = 0;
+    friend bool operator==(const Texel&, const Texel&) = default;
+};
+
+// The texel of an N×N map that holds uv: [x/N, (x+1)/N) × [y/N, (y+1)/N), clamped to
+// [0, N-1] so that u or v = 1 lands on the last texel.
+[[nodiscard]] inline Texel texel_of_uv(const glm::vec2& uv, int n) {
+    const float fn = static_cast<float>(n);
+    const int x = static_cast<int>(std::floor(uv.x * fn));
+    const int y = static_cast<int>(std::floor(uv.y * fn));
+    return Texel{std::clamp(x, 0, n - 1), std::clamp(y, 0, n - 1)};
+}
+
+[[nodiscard]] inline Texel texel_of_direction(const glm::vec3& d, int n) {
+    return texel_of_uv(encode(d), n);
+}
+
+// uv of a texel's centre.
+[[nodiscard]] inline glm::vec2 texel_center_uv(Texel t, int n) {
+    const float fn = static_cast<float>(n);
+    return glm::vec2{(static_cast<float>(t.x) + 0.5f) / fn, (static_cast<float>(t.y) + 0.5f) / fn};
+}
+
+// The direction a texel stands for: the decode of its centre.
+[[nodiscard]] inline glm::vec3 texel_direction(Texel t, int n) {
+    return decode(texel_center_uv(t, n));
+}
+
+// The texel that continues the map across its outer edge: the octahedral map's border is
+// mirrored (texel (x, -1) is texel (N-1-x, 0)), so neighbourhoods may step over it. Any offset
+// of less than N texels outside the map is folded back inside.
+[[nodiscard]] inline Texel wrap_texel(int x, int y, int n) {
+    if (x < 0) {
+        x = -x - 1;
+        y = n - 1 - y;
+    } else if (x >= n) {
+        x = 2 * n - 1 - x;
+        y = n - 1 - y;
+    }
+    if (y < 0) {
+        y = -y - 1;
+        x = n - 1 - x;
+    } else if (y >= n) {
+        y = 2 * n - 1 - y;
+        x = n - 1 - x;
+    }
+    return Texel{std::clamp(x, 0, n - 1), std::clamp(y, 0, n - 1)};
+}
+
+[[nodiscard]] inline std::size_t texel_index(Texel t, int n) {
+    return static_cast<std::size_t>(t.y) * static_cast<std::size_t>(n) +
+           static_cast<std::size_t>(t.x);
+}
+
+} // namespace lfprobe::oct

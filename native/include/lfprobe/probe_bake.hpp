@@ -1,0 +1,41 @@
+// Baking probes from a point cloud (DESIGN.md §4): every point is projected into each probe's
+// octahedral map and splatted over the texels its footprint covers at that distance (a point
+// stands for a patch of about the local spacing), the nearest surface winning per texel; small
+// holes are filled by pull-push and marked as inferred, large holes stay unknown.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include "lfprobe/local_geometry.hpp"
+#include "lfprobe/point_cloud.hpp"
+#include "lfprobe/probe_map.hpp"
+#include "lfprobe/progress.hpp"
+
+namespace lfprobe {
+
+struct BakeSettings {
+    int resolution = 512;
+    // Splat radius as a multiple of the local point spacing. 0.8 of the mean distance to six
+    // neighbours covers a square sampling pattern (which needs 0.71 of its pitch) with margin.
+    float splat_scale = 0.8f;
+    // Largest splat radius in texels; bounds the cost of points very close to a probe.
+    int max_splat_radius_texels = 64;
+    // Holes up to this many texels across are filled and marked inferred; larger stay unknown.
+    int hole_fill_texels = 4;
+    // Points nearer than this to the probe centre are skipped (no direction to speak of).
+    float min_distance = 1e-4f;
+};
+
+// Bakes one probe at `centre` (local frame). `geometry` comes from estimate_local_geometry on
+// the same cloud. Runs on all cores; checks progress for cancellation.
+[[nodiscard]] ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geometry,
+                                             const glm::dvec3& centre, const BakeSettings& settings,
+                                             Progress* progress = nullptr);
+
+// Fills holes of at most settings.hole_fill_texels texels across by pull-push over the measured
+// texels, marking them inferred (confidence 0.5 per pyramid level climbed); other texels with no
+// data become unknown. Texels already surface, empty or inferred are left as they are.
+void fill_small_holes(ProbeMap& map, int hole_fill_texels);
+
+} // namespace lfprobe

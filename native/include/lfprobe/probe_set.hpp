@@ -1,0 +1,72 @@
+// A probe set on disk (DESIGN.md §3): a folder with manifest.json and one EXR per probe.
+// The manifest holds the format version, the world offset, the placement (positions, or grid
+// origin/spacing/counts), per-probe resolution and coverage, the bake settings and the
+// sources with their hashes. It is written last, so a folder without it is no probe set.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "lfprobe/probe_bake.hpp"
+#include "lfprobe/probe_map.hpp"
+#include "lfprobe/probe_placement.hpp"
+#include "lfprobe/progress.hpp"
+
+namespace lfprobe {
+
+inline constexpr int kProbeSetFormatVersion = 1;
+inline constexpr const char* kManifestName = "manifest.json";
+
+struct ProbeRecord {
+    std::string file; // relative to the set's folder
+    glm::dvec3 position{0.0};
+    int resolution = 0;
+    ProbeCoverage coverage;
+    std::size_t memory_bytes = 0;
+};
+
+struct ProbeSetManifest {
+    int format_version = kProbeSetFormatVersion;
+    glm::dvec3 world_offset{0.0};
+    ProbePlacement placement;
+    std::vector<ProbeRecord> probes;
+    nlohmann::json bake;    // settings the probes were baked with
+    nlohmann::json sources; // array: path, hash, points, scanner, ...
+
+    [[nodiscard]] nlohmann::json to_json() const;
+    [[nodiscard]] static ProbeSetManifest from_json(const nlohmann::json& j,
+                                                    const std::string& where);
+};
+
+[[nodiscard]] std::string probe_file_name(std::size_t index);
+
+[[nodiscard]] ProbeSetManifest read_manifest(const std::string& folder);
+void write_manifest(const std::string& folder, const ProbeSetManifest& manifest);
+
+// Reads probe `index` of the set in `folder`.
+[[nodiscard]] ProbeMap read_probe(const std::string& folder, const ProbeSetManifest& manifest,
+                                  std::size_t index);
+
+struct BakeSummary {
+    std::string folder;
+    std::size_t probe_count = 0;
+    double normals_seconds = 0.0;
+    double bake_seconds = 0.0;  // all probes, splatting and hole filling
+    double write_seconds = 0.0; // EXR encoding and writing
+    ProbeCoverage mean_coverage;
+    std::size_t bytes_in_memory_per_probe = 0;
+    std::size_t bytes_on_disk = 0;
+};
+
+// Bakes every probe of `placement` from `cloud` into `folder` (created when missing), one probe
+// at a time so memory stays at one probe's maps, and writes the manifest last. `sources` goes
+// into the manifest as given. On cancellation or error no partial probe file is left behind.
+[[nodiscard]] BakeSummary
+bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,
+                          const BakeSettings& settings,
+                          const LocalGeometryOptions& geometry_options, const std::string& folder,
+                          const nlohmann::json& sources, Progress* progress = nullptr);
+
+} // namespace lfprobe

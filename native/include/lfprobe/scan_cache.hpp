@@ -1,0 +1,20 @@
+// A binary cache of parsed scan files, so that a cloud of tens of millions of points is
+// parsed once. Entries are keyed by the file's absolute path, size, modification time and
+// the read options; a stale or corrupt entry is ignored and rewritten. Entries are written to
+// a temporary name and renamed, so an interrupted write never leaves a partial entry.
+#pragma once
+
+#include <string>
+
+#include "lfprobe/scan_reader.hpp"
+
+namespace lfprobe {
+
+// Reads `path` through the cache in `cache_dir` (created when missing). An empty cache_dir
+// disables caching. `hit` (when given) says whether the cache answered.
+[[nodiscard]] ScanFile read_scan_file_cached(const std::string& path,
+                                             const ScanReadOptions& options,
+                                             const std::string& cache_dir,
+                                             Progress* progress = nullptr, bool* hit = nullptr);
+
+} // namespace lfprobe

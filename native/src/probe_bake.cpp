@@ -1,0 +1,237 @@
+#include "lfprobe/probe_bake.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include "lfprobe/error.hpp"
+#include "lfprobe/octahedral.hpp"
+
+namespace lfprobe {
+
+namespace {
+
+constexpr std::uint64_t kNoPoint = std::numeric_limits<std::uint64_t>::max();
+constexpr std::size_t kPointChunk = 65536;
+// Below this |cos| between the texel ray and the surfel normal the surfel plane is too
+// grazing to extrapolate a depth from, and the point's own radial distance is used.
+constexpr float kMinPlaneCosine = 0.05f;
+
+// The smallest angle between the centres of two neighbouring texels of an N×N map: a lower
+// bound on the angular size of any texel, which turns an angular splat radius into a texel
+// search radius that is never too small.
+float min_texel_angle(int n) {
+    static std::mutex mutex;
+    static std::map<int, float> cache;
+    std::lock_guard lock(mutex);
+    if (auto it = cache.find(n); it != cache.end()) {
+        return it->second;
+    }
+    float smallest = std::numeric_limits<float>::infinity();
+    for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+            const glm::vec3 d = oct::texel_direction({x, y}, n);
+            if (x + 1 < n) {
+                const glm::vec3 e = oct::texel_direction({x + 1, y}, n);
+                smallest = std::min(smallest, std::acos(std::min(1.0f, glm::dot(d, e))));
+            }
+            if (y + 1 < n) {
+                const glm::vec3 e = oct::texel_direction({x, y + 1}, n);
+                smallest = std::min(smallest, std::acos(std::min(1.0f, glm::dot(d, e))));
+            }
+        }
+    }
+    if (!(smallest > 0.0f)) {
+        smallest = 1e-6f;
+    }
+    cache[n] = smallest;
+    return smallest;
+}
+
+// Depth along a texel's ray where it meets the point's surfel plane: exact for planar
+// surfaces and consistent between neighbouring texels. Too grazing a plane, or one that puts the
+// surface implausibly far from the point, falls back to the point's own radial distance.
+float surfel_depth(const glm::vec3& normal, const glm::vec3& v, float dist,
+                   const glm::vec3& texel_dir) {
+    const float cos_plane = glm::dot(normal, texel_dir);
+    if (std::abs(cos_plane) >= kMinPlaneCosine) {
+        const float s = glm::dot(normal, v) / cos_plane;
+        if (s > 0.5f * dist && s < 2.0f * dist) {
+            return s;
+        }
+    }
+    return dist;
+}
+
+void keep_smaller(std::uint32_t& slot, std::uint32_t value) {
+    std::atomic_ref<std::uint32_t> ref(slot);
+    std::uint32_t current = ref.load(std::memory_order_relaxed);
+    while (value < current &&
+           !ref.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
+    }
+}
+
+void keep_smaller(std::uint64_t& slot, std::uint64_t value) {
+    std::atomic_ref<std::uint64_t> ref(slot);
+    std::uint64_t current = ref.load(std::memory_order_relaxed);
+    while (value < current &&
+           !ref.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
+    }
+}
+
+// Non-negative floats order like their bit patterns.
+std::uint32_t ordered_bits(float non_negative) {
+    return std::bit_cast<std::uint32_t>(non_negative);
+}
+
+} // namespace
+
+ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geometry,
+                               const glm::dvec3& centre, const BakeSettings& settings,
+                               Progress* progress) {
+    const int n = settings.resolution;
+    if (n < 2 || n > 16384) {
+        throw InputError("bake: resolution must be between 2 and 16384, got " + std::to_string(n));
+    }
+    if (cloud.size() > std::numeric_limits<std::uint32_t>::max()) {
+        throw InputError("bake: at most 2^32-1 points per cloud");
+    }
+    if (geometry.normals.size() != cloud.size() || geometry.spacing.size() != cloud.size()) {
+        throw InputError("bake: local geometry does not belong to this cloud");
+    }
+    if (!(std::isfinite(centre.x) && std::isfinite(centre.y) && std::isfinite(centre.z))) {
+        throw InputError("bake: probe position must be finite");
+    }
+    ProbeMap map(n, centre);
+    const std::size_t texels = map.texel_count();
+    const float texel_angle = min_texel_angle(n);
+    std::vector<glm::vec3> directions(texels);
+    tbb::parallel_for(0, n, [&](int y) {
+        for (int x = 0; x < n; ++x) {
+            directions[oct::texel_index({x, y}, n)] = oct::texel_direction({x, y}, n);
+        }
+    });
+    const int max_radius = std::max(1, std::min(settings.max_splat_radius_texels, n / 2));
+    const std::size_t count = cloud.size();
+
+    // A point's normal as the probe sees it: oriented toward its scanner where that is known,
+    // else toward the probe.
+    auto normal_of = [&](std::size_t i, const glm::vec3& v) {
+        const glm::vec3 normal = geometry.normals[i];
+        return !geometry.oriented[i] && glm::dot(normal, v) > 0.0f ? -normal : normal;
+    };
+    // Calls visit(texel, texel_dir, v, dist, dir) for every texel point i's splat covers.
+    auto for_each_splat_texel = [&](std::size_t i, auto&& visit) {
+        const glm::vec3 v = glm::vec3(glm::dvec3(cloud.positions[i]) - centre);
+        const float dist = glm::length(v);
+        if (!(dist >= settings.min_distance)) {
+            return;
+        }
+        const glm::vec3 dir = v / dist;
+        const oct::Texel home = oct::texel_of_direction(dir, n);
+        const float alpha = std::atan2(settings.splat_scale * geometry.spacing[i], dist);
+        const float cos_alpha = std::cos(alpha);
+        // A neighbour k texels away lies at least (k - 0.5) texel angles from `dir`.
+        const int r = std::min(max_radius, static_cast<int>(std::ceil(alpha / texel_angle + 0.5f)));
+        for (int dy = -r; dy <= r; ++dy) {
+            for (int dx = -r; dx <= r; ++dx) {
+                const std::size_t t =
+                    oct::texel_index(oct::wrap_texel(home.x + dx, home.y + dy, n), n);
+                const glm::vec3& texel_dir = directions[t];
+                // The point always claims its own texel; neighbours only inside its footprint.
+                if ((dx != 0 || dy != 0) && glm::dot(texel_dir, dir) < cos_alpha) {
+                    continue;
+                }
+                visit(t, texel_dir, v, dist, dir);
+            }
+        }
+    };
+    auto over_points = [&](const char* stage, auto&& per_point) {
+        if (progress != nullptr) {
+            progress->begin_stage(stage, count);
+        }
+        tbb::parallel_for(std::size_t{0}, (count + kPointChunk - 1) / kPointChunk,
+                          [&](std::size_t chunk) {
+                              if (progress != nullptr) {
+                                  progress->throw_if_cancelled();
+                              }
+                              const std::size_t end = std::min(count, (chunk + 1) * kPointChunk);
+                              for (std::size_t i = chunk * kPointChunk; i < end; ++i) {
+                                  per_point(i);
+                              }
+                              if (progress != nullptr) {
+                                  progress->advance(end - chunk * kPointChunk);
+                              }
+                          });
+    };
+
+    // Pass 1: the nearest surface depth per texel.
+    std::vector<std::uint32_t> front(texels, ordered_bits(kEmptyDistance));
+    over_points("splatting points: depth", [&](std::size_t i) {
+        for_each_splat_texel(i, [&](std::size_t t, const glm::vec3& texel_dir, const glm::vec3& v,
+                                    float dist, const glm::vec3&) {
+            const float depth = surfel_depth(normal_of(i, v), v, dist, texel_dir);
+            keep_smaller(front[t], ordered_bits(depth));
+        });
+    });
+    // Pass 2: among the points on that front surface (within a surface thickness of about the
+    // point spacing), the one whose direction is closest to the texel's centre gives the texel
+    // its colour and normal, so texels stay sharp instead of taking any point of the footprint.
+    std::vector<std::uint64_t> winner(texels, kNoPoint);
+    over_points("splatting points: colour", [&](std::size_t i) {
+        const float thickness = geometry.spacing[i];
+        for_each_splat_texel(i, [&](std::size_t t, const glm::vec3& texel_dir, const glm::vec3& v,
+                                    float dist, const glm::vec3& dir) {
+            const float depth = surfel_depth(normal_of(i, v), v, dist, texel_dir);
+            const float nearest = std::bit_cast<float>(front[t]);
+            if (depth > nearest + std::max(thickness, 1e-3f * nearest)) {
+                return;
+            }
+            const float off_centre = std::max(0.0f, 1.0f - glm::dot(texel_dir, dir));
+            keep_smaller(winner[t], (static_cast<std::uint64_t>(ordered_bits(off_centre)) << 32) |
+                                        static_cast<std::uint32_t>(i));
+        });
+    });
+
+    // Resolve the winning point of every texel into the maps.
+    float intensity_min = 0.0f;
+    float intensity_scale = 0.0f;
+    if (!cloud.has_colors() && !cloud.intensities.empty()) {
+        const auto [lo, hi] =
+            std::minmax_element(cloud.intensities.begin(), cloud.intensities.end());
+        intensity_min = *lo;
+        intensity_scale = *hi > *lo ? 1.0f / (*hi - *lo) : 0.0f;
+    }
+    tbb::parallel_for(std::size_t{0}, texels, [&](std::size_t t) {
+        if (winner[t] == kNoPoint) {
+            return;
+        }
+        const std::size_t i = static_cast<std::uint32_t>(winner[t] & 0xffffffffu);
+        glm::vec3 rgb(0.5f);
+        if (cloud.has_colors()) {
+            rgb = cloud.colors[i];
+        } else if (!cloud.intensities.empty()) {
+            rgb = glm::vec3((cloud.intensities[i] - intensity_min) * intensity_scale);
+        }
+        const glm::vec3 v = glm::vec3(glm::dvec3(cloud.positions[i]) - centre);
+        const glm::vec3 normal = normal_of(i, v);
+        map.set_surface(t, surfel_depth(normal, v, glm::length(v), directions[t]), rgb, normal,
+                        1.0f);
+    });
+    if (progress != nullptr) {
+        progress->throw_if_cancelled();
+    }
+    fill_small_holes(map, settings.hole_fill_texels);
+    return map;
+}
+
+} // namespace lfprobe

@@ -1,0 +1,124 @@
+#include "lfprobe/probe_exr.hpp"
+
+#include <filesystem>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
+#include <ImfThreading.h>
+#include <ImfVecAttribute.h>
+
+#include "lfprobe/error.hpp"
+
+namespace lfprobe {
+
+namespace {
+
+constexpr const char* kFormatAttribute = "lfprobe/format";
+constexpr const char* kFormatValue = "lfprobe-probe 1";
+constexpr const char* kPositionAttribute = "lfprobe/position";
+
+void use_all_cores_for_exr() {
+    static std::once_flag once;
+    std::call_once(once, [] {
+        Imf::setGlobalThreadCount(
+            static_cast<int>(std::max(1u, std::thread::hardware_concurrency())));
+    });
+}
+
+// Slices over the map's arrays, shared by reading and writing so the layout is stated once.
+Imf::FrameBuffer probe_frame_buffer(ProbeMap& map) {
+    const std::size_t n = static_cast<std::size_t>(map.resolution);
+    Imf::FrameBuffer fb;
+    const char* rgba_names[4] = {"R", "G", "B", "A"};
+    for (std::size_t c = 0; c < 4; ++c) {
+        fb.insert(rgba_names[c], Imf::Slice(Imf::HALF, reinterpret_cast<char*>(map.rgba.data() + c),
+                                            4 * sizeof(Imath::half), 4 * sizeof(Imath::half) * n));
+    }
+    fb.insert("Z", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(map.distance.data()),
+                              sizeof(float), sizeof(float) * n));
+    const char* normal_names[3] = {"N.X", "N.Y", "N.Z"};
+    for (std::size_t c = 0; c < 3; ++c) {
+        fb.insert(normal_names[c],
+                  Imf::Slice(Imf::HALF, reinterpret_cast<char*>(map.normal.data() + c),
+                             3 * sizeof(Imath::half), 3 * sizeof(Imath::half) * n));
+    }
+    return fb;
+}
+
+} // namespace
+
+void write_probe_exr(const std::string& path, const ProbeMap& map) {
+    use_all_cores_for_exr();
+    const int n = map.resolution;
+    Imf::Header header(n, n);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const char* name : {"R", "G", "B", "A", "N.X", "N.Y", "N.Z"}) {
+        header.channels().insert(name, Imf::Channel(Imf::HALF));
+    }
+    header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+    header.insert(kFormatAttribute, Imf::StringAttribute(kFormatValue));
+    header.insert(kPositionAttribute,
+                  Imf::V3dAttribute(Imath::V3d(map.position.x, map.position.y, map.position.z)));
+    const std::string tmp = temporary_path_for(path);
+    try {
+        {
+            Imf::OutputFile file(tmp.c_str(), header);
+            // The writer only reads through the slices; the cast lets one layout serve both ways.
+            file.setFrameBuffer(probe_frame_buffer(const_cast<ProbeMap&>(map)));
+            file.writePixels(n);
+        }
+        std::filesystem::rename(tmp, path);
+    } catch (const std::exception& e) {
+        std::error_code ignored;
+        std::filesystem::remove(tmp, ignored);
+        throw IoError(path + ": cannot write probe EXR (" + e.what() + ")");
+    }
+}
+
+ProbeMap read_probe_exr(const std::string& path) {
+    use_all_cores_for_exr();
+    if (!std::filesystem::exists(path)) {
+        throw IoError(path + ": no such probe file");
+    }
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imath::Box2i window = file.header().dataWindow();
+        const int w = window.max.x - window.min.x + 1;
+        const int h = window.max.y - window.min.y + 1;
+        if (w != h || w < 1 || window.min.x != 0 || window.min.y != 0) {
+            throw InputError(path +
+                             ": expected a square probe map with its data window at (0, 0), "
+                             "got " +
+                             std::to_string(w) + "×" + std::to_string(h));
+        }
+        const Imf::ChannelList& channels = file.header().channels();
+        for (const char* name : {"R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z"}) {
+            if (channels.findChannel(name) == nullptr) {
+                throw InputError(path + ": expected channel '" + name +
+                                 "' of a probe EXR (R G B A Z N.X N.Y N.Z)");
+            }
+        }
+        glm::dvec3 position(0.0);
+        if (const auto* attr =
+                file.header().findTypedAttribute<Imf::V3dAttribute>(kPositionAttribute)) {
+            position = glm::dvec3(attr->value().x, attr->value().y, attr->value().z);
+        }
+        ProbeMap map(w, position);
+        file.setFrameBuffer(probe_frame_buffer(map));
+        file.readPixels(window.min.y, window.max.y);
+        return map;
+    } catch (const InputError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw InputError(path + ": not a readable probe EXR (" + e.what() + ")");
+    }
+}
+
+} // namespace lfprobe

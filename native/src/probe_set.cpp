@@ -1,0 +1,254 @@
+#include "lfprobe/probe_set.hpp"
+
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "lfprobe/error.hpp"
+#include "lfprobe/probe_exr.hpp"
+
+namespace lfprobe {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+json vec_json(const glm::dvec3& v) {
+    return json::array({v.x, v.y, v.z});
+}
+
+glm::dvec3 vec_from(const json& j, const std::string& what, const std::string& where) {
+    if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() ||
+        !j[2].is_number()) {
+        throw InputError(where + ": '" + what + "' must be an array of three numbers");
+    }
+    return {j[0].get<double>(), j[1].get<double>(), j[2].get<double>()};
+}
+
+json coverage_json(const ProbeCoverage& c) {
+    return json{{"surface", c.surface},
+                {"inferred", c.inferred},
+                {"empty", c.empty},
+                {"unknown", c.unknown}};
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+} // namespace
+
+std::string probe_file_name(std::size_t index) {
+    char name[32];
+    std::snprintf(name, sizeof name, "probe_%05zu.exr", index);
+    return name;
+}
+
+json ProbeSetManifest::to_json() const {
+    json j;
+    j["format"] = "lfprobe-probe-set";
+    j["format_version"] = format_version;
+    j["world_offset"] = vec_json(world_offset);
+    j["frame"] = "probe positions are local: world = world_offset + position";
+    if (placement.is_grid) {
+        j["layout"] = "grid";
+        j["grid"] = json{{"origin", vec_json(placement.grid.origin)},
+                         {"spacing", vec_json(placement.grid.spacing)},
+                         {"counts", placement.grid.counts}};
+    } else {
+        j["layout"] = "positions";
+    }
+    json list = json::array();
+    for (const ProbeRecord& p : probes) {
+        list.push_back(json{{"file", p.file},
+                            {"position", vec_json(p.position)},
+                            {"resolution", p.resolution},
+                            {"coverage", coverage_json(p.coverage)},
+                            {"memory_bytes", p.memory_bytes}});
+    }
+    j["probes"] = list;
+    j["bake"] = bake;
+    j["sources"] = sources.is_null() ? json::array() : sources;
+    j["channels"] = json{{"R,G,B", "linear radiance, half"},
+                         {"A", "confidence: 1 measured, (0,1) inferred, 0 unknown or empty"},
+                         {"Z", "radial distance in metres, float32; NaN unknown, +inf empty"},
+                         {"N.X,N.Y,N.Z", "world-space unit surface normal, half"}};
+    return j;
+}
+
+ProbeSetManifest ProbeSetManifest::from_json(const json& j, const std::string& where) {
+    if (!j.is_object() || j.value("format", "") != "lfprobe-probe-set") {
+        throw InputError(where + ": not an lfprobe probe set manifest (expected \"format\": "
+                                 "\"lfprobe-probe-set\")");
+    }
+    ProbeSetManifest m;
+    m.format_version = j.value("format_version", 0);
+    if (m.format_version != kProbeSetFormatVersion) {
+        throw InputError(where + ": format_version " + std::to_string(m.format_version) +
+                         " is not supported (expected " + std::to_string(kProbeSetFormatVersion) +
+                         ")");
+    }
+    m.world_offset = vec_from(j.at("world_offset"), "world_offset", where);
+    if (!j.contains("probes") || !j["probes"].is_array()) {
+        throw InputError(where + ": expected a 'probes' array");
+    }
+    std::vector<glm::dvec3> positions;
+    for (const json& p : j["probes"]) {
+        ProbeRecord r;
+        r.file = p.at("file").get<std::string>();
+        if (r.file.find('/') != std::string::npos || r.file.find("..") != std::string::npos) {
+            throw InputError(where + ": probe file '" + r.file + "' must be a plain file name");
+        }
+        r.position = vec_from(p.at("position"), "position", where);
+        r.resolution = p.at("resolution").get<int>();
+        if (p.contains("coverage")) {
+            const json& c = p["coverage"];
+            r.coverage = ProbeCoverage{c.value("surface", 0.0), c.value("inferred", 0.0),
+                                       c.value("empty", 0.0), c.value("unknown", 0.0)};
+        }
+        r.memory_bytes = p.value("memory_bytes", std::size_t{0});
+        positions.push_back(r.position);
+        m.probes.push_back(std::move(r));
+    }
+    if (j.value("layout", "positions") == "grid") {
+        const json& g = j.at("grid");
+        ProbeGrid grid;
+        grid.origin = vec_from(g.at("origin"), "grid.origin", where);
+        grid.spacing = vec_from(g.at("spacing"), "grid.spacing", where);
+        grid.counts = g.at("counts").get<std::array<int, 3>>();
+        m.placement = ProbePlacement::from_grid(grid);
+        if (m.placement.positions.size() != m.probes.size()) {
+            throw InputError(where + ": grid counts give " +
+                             std::to_string(m.placement.positions.size()) + " probes but " +
+                             std::to_string(m.probes.size()) + " are listed");
+        }
+    } else {
+        m.placement = ProbePlacement::from_positions(positions);
+    }
+    m.bake = j.value("bake", json::object());
+    m.sources = j.value("sources", json::array());
+    return m;
+}
+
+ProbeSetManifest read_manifest(const std::string& folder) {
+    const std::string path = (fs::path(folder) / kManifestName).string();
+    std::ifstream in(path);
+    if (!in) {
+        throw IoError(path + ": no probe set manifest here (was the bake finished?)");
+    }
+    json j;
+    try {
+        j = json::parse(in);
+    } catch (const json::exception& e) {
+        throw InputError(path + ": invalid JSON (" + e.what() + ")");
+    }
+    try {
+        return ProbeSetManifest::from_json(j, path);
+    } catch (const json::exception& e) {
+        throw InputError(path + ": " + e.what());
+    }
+}
+
+void write_manifest(const std::string& folder, const ProbeSetManifest& manifest) {
+    write_file_atomically((fs::path(folder) / kManifestName).string(),
+                          manifest.to_json().dump(2) + "\n");
+}
+
+ProbeMap read_probe(const std::string& folder, const ProbeSetManifest& manifest,
+                    std::size_t index) {
+    if (index >= manifest.probes.size()) {
+        throw InputError(folder + ": probe " + std::to_string(index) +
+                         " does not exist (the set has " + std::to_string(manifest.probes.size()) +
+                         ")");
+    }
+    const ProbeRecord& record = manifest.probes[index];
+    ProbeMap map = read_probe_exr((fs::path(folder) / record.file).string());
+    if (map.resolution != record.resolution) {
+        throw InputError(folder + "/" + record.file + ": resolution " +
+                         std::to_string(map.resolution) + " does not match the manifest's " +
+                         std::to_string(record.resolution));
+    }
+    map.position = record.position;
+    return map;
+}
+
+BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,
+                                      const BakeSettings& settings,
+                                      const LocalGeometryOptions& geometry_options,
+                                      const std::string& folder, const json& sources,
+                                      Progress* progress) {
+    if (placement.positions.empty()) {
+        throw InputError("bake: no probe positions given");
+    }
+    if (cloud.size() == 0) {
+        throw InputError("bake: the point cloud is empty");
+    }
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (ec) {
+        throw IoError(folder + ": cannot create the probe set folder (" + ec.message() + ")");
+    }
+    BakeSummary summary;
+    summary.folder = folder;
+    auto start = std::chrono::steady_clock::now();
+    const LocalGeometry geometry = estimate_local_geometry(cloud, geometry_options, progress);
+    summary.normals_seconds = seconds_since(start);
+
+    ProbeSetManifest manifest;
+    manifest.world_offset = cloud.world_offset;
+    manifest.placement = placement;
+    manifest.bake = json{{"source", "point cloud"},
+                         {"resolution", settings.resolution},
+                         {"splat_scale", settings.splat_scale},
+                         {"max_splat_radius_texels", settings.max_splat_radius_texels},
+                         {"hole_fill_texels", settings.hole_fill_texels},
+                         {"min_distance", settings.min_distance},
+                         {"normal_neighbours", geometry_options.normal_neighbours},
+                         {"spacing_neighbours", geometry_options.spacing_neighbours},
+                         {"points", cloud.size()}};
+    manifest.sources = sources;
+    // Files of an earlier set in this folder would be mixed with the new ones: the manifest
+    // goes first, and comes back only once every probe is written.
+    fs::remove(fs::path(folder) / kManifestName, ec);
+    for (std::size_t i = 0; i < placement.positions.size(); ++i) {
+        if (progress != nullptr) {
+            progress->throw_if_cancelled();
+        }
+        start = std::chrono::steady_clock::now();
+        ProbeMap map =
+            bake_probe_from_cloud(cloud, geometry, placement.positions[i], settings, progress);
+        summary.bake_seconds += seconds_since(start);
+        start = std::chrono::steady_clock::now();
+        if (progress != nullptr) {
+            progress->begin_stage("writing probe " + std::to_string(i + 1) + " of " +
+                                      std::to_string(placement.positions.size()),
+                                  1);
+        }
+        const std::string file = probe_file_name(i);
+        const std::string path = (fs::path(folder) / file).string();
+        write_probe_exr(path, map);
+        summary.write_seconds += seconds_since(start);
+        ProbeRecord record{file, placement.positions[i], map.resolution, coverage_of(map),
+                           map.memory_bytes()};
+        summary.mean_coverage.surface += record.coverage.surface;
+        summary.mean_coverage.inferred += record.coverage.inferred;
+        summary.mean_coverage.empty += record.coverage.empty;
+        summary.mean_coverage.unknown += record.coverage.unknown;
+        summary.bytes_in_memory_per_probe = map.memory_bytes();
+        summary.bytes_on_disk += static_cast<std::size_t>(fs::file_size(path));
+        manifest.probes.push_back(std::move(record));
+    }
+    write_manifest(folder, manifest);
+    const double count = static_cast<double>(manifest.probes.size());
+    summary.probe_count = manifest.probes.size();
+    summary.mean_coverage.surface /= count;
+    summary.mean_coverage.inferred /= count;
+    summary.mean_coverage.empty /= count;
+    summary.mean_coverage.unknown /= count;
+    return summary;
+}
+
+} // namespace lfprobe

@@ -1,0 +1,255 @@
+// Probe bakes from clouds with a known answer (DESIGN.md §4).
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "lfprobe/octahedral.hpp"
+#include "lfprobe/probe_bake.hpp"
+#include "synthetic_scene.hpp"
+
+using namespace lfprobe;
+using lfprobe::testing::BoxRoomScene;
+
+namespace {
+
+struct BakeErrors {
+    double coverage = 0.0;         // measured or inferred texels over all texels
+    double within_tolerance = 0.0; // of covered texels, fraction within tolerance
+    double median_error = 0.0;
+    double colour_within = 0.0; // of covered texels, fraction with the right colour
+};
+
+BakeErrors measure(const ProbeMap& map, const BoxRoomScene& scene, float tolerance) {
+    const int n = map.resolution;
+    std::vector<double> errors;
+    std::size_t covered = 0;
+    std::size_t within = 0;
+    std::size_t colour_ok = 0;
+    const glm::vec3 centre(map.position);
+    for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+            const std::size_t i = oct::texel_index({x, y}, n);
+            const TexelState s = map.state(i);
+            if (s != TexelState::Surface && s != TexelState::Inferred) {
+                continue;
+            }
+            ++covered;
+            const glm::vec3 dir = oct::texel_direction({x, y}, n);
+            const float truth = scene.distance(centre, dir);
+            const double err = std::abs(static_cast<double>(map.distance[i]) - truth);
+            errors.push_back(err);
+            within += err <= tolerance ? 1 : 0;
+            const glm::vec3 expected = BoxRoomScene::colour_at(centre + truth * dir);
+            colour_ok += glm::length(map.radiance_at(i) - expected) < 0.08f ? 1 : 0;
+        }
+    }
+    BakeErrors e;
+    e.coverage = static_cast<double>(covered) / static_cast<double>(map.texel_count());
+    e.within_tolerance =
+        static_cast<double>(within) / static_cast<double>(std::max<std::size_t>(covered, 1));
+    e.colour_within =
+        static_cast<double>(colour_ok) / static_cast<double>(std::max<std::size_t>(covered, 1));
+    std::nth_element(errors.begin(), errors.begin() + static_cast<long>(errors.size() / 2),
+                     errors.end());
+    e.median_error = errors.empty() ? 0.0 : errors[errors.size() / 2];
+    return e;
+}
+
+} // namespace
+
+TEST(ProbeBake, BoxRoomDistancesMatchTheAnalyticScene) {
+    const BoxRoomScene scene;
+    const glm::dvec3 scanner(-0.4, -0.2, 1.3);
+    const PointCloud cloud = scene.cloud(0.01f, scanner);
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    BakeSettings settings;
+    settings.resolution = 128;
+    for (const glm::dvec3 probe :
+         {scanner, glm::dvec3(0.5, -0.8, 0.6), glm::dvec3(-1.5, 1.0, 2.0)}) {
+        const ProbeMap map = bake_probe_from_cloud(cloud, geometry, probe, settings);
+        const BakeErrors e = measure(map, scene, 0.01f);
+        std::printf("probe (%.1f %.1f %.1f): coverage %.4f, within 1 cm %.4f, median error %.2g m, "
+                    "colour ok %.4f\n",
+                    probe.x, probe.y, probe.z, e.coverage, e.within_tolerance, e.median_error,
+                    e.colour_within);
+        EXPECT_GT(e.coverage, 0.99);
+        EXPECT_GT(e.within_tolerance, 0.99); // the rest sit on silhouettes and grazing walls
+        EXPECT_LT(e.median_error, 1e-3);
+        EXPECT_GT(e.colour_within, 0.97);
+    }
+}
+
+TEST(ProbeBake, NothingBehindASurfaceShowsThroughIt) {
+    // A sparsely sampled near wall (5 cm pitch, 0.6 m from the probe) in front of a dense far
+    // wall (3 m): at 512² a texel is ~4 mm on the near wall, so without splats most texels
+    // between near points would see the far wall.
+    PointCloud cloud;
+    auto add_wall = [&](float x, float pitch, float half_extent) {
+        const int count = static_cast<int>(2.0f * half_extent / pitch) + 1;
+        for (int i = 0; i < count; ++i) {
+            for (int j = 0; j < count; ++j) {
+                cloud.positions.emplace_back(x, -half_extent + static_cast<float>(i) * pitch,
+                                             -half_extent + static_cast<float>(j) * pitch);
+                cloud.colors.emplace_back(x < 1.0f ? 1.0f : 0.0f, 0.0f, 0.0f);
+                cloud.scan_index.push_back(0);
+            }
+        }
+    };
+    add_wall(0.6f, 0.05f, 0.5f);
+    add_wall(3.0f, 0.01f, 3.0f);
+    cloud.scans.push_back(ScanSource{"two walls", cloud.positions.size(), glm::dvec3(0.0), true});
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+
+    auto leak_fraction = [&](float splat_scale) {
+        BakeSettings settings;
+        settings.resolution = 512;
+        settings.splat_scale = splat_scale;
+        settings.hole_fill_texels = 0;
+        const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+        std::size_t inside = 0;
+        std::size_t leaked = 0;
+        for (int y = 0; y < map.resolution; ++y) {
+            for (int x = 0; x < map.resolution; ++x) {
+                const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
+                if (d.x <= 0.0f) {
+                    continue;
+                }
+                const glm::vec3 on_plane = d * (0.6f / d.x);
+                // Well inside the near wall's extent.
+                if (std::abs(on_plane.y) > 0.45f || std::abs(on_plane.z) > 0.45f) {
+                    continue;
+                }
+                ++inside;
+                const float dist = map.distance[oct::texel_index({x, y}, map.resolution)];
+                leaked += !(dist < 1.0f) ? 1 : 0;
+            }
+        }
+        return static_cast<double>(leaked) / static_cast<double>(inside);
+    };
+    const double with_splats = leak_fraction(0.8f);
+    const double without = leak_fraction(0.0f);
+    std::printf("far wall seen through the near wall: %.4f with splats, %.4f without\n",
+                with_splats, without);
+    EXPECT_EQ(with_splats, 0.0);
+    EXPECT_GT(without, 0.5); // the paper's aliasing, reproduced without splats
+}
+
+TEST(ProbeBake, SmallHolesAreInferredAndLargeHolesStayUnknown) {
+    ProbeMap map(64, glm::dvec3(0.0));
+    for (std::size_t i = 0; i < map.texel_count(); ++i) {
+        map.set_surface(i, 2.0f, glm::vec3(0.25f), glm::vec3(0, 0, 1), 1.0f);
+    }
+    auto at = [&](int x, int y) { return oct::texel_index({x, y}, 64); };
+    // A 2×2 hole, and a 10×10 hole.
+    for (int y = 10; y < 12; ++y) {
+        for (int x = 10; x < 12; ++x) {
+            map.set_unknown(at(x, y));
+        }
+    }
+    for (int y = 30; y < 40; ++y) {
+        for (int x = 30; x < 40; ++x) {
+            map.set_unknown(at(x, y));
+        }
+    }
+    fill_small_holes(map, 4);
+    for (int y = 10; y < 12; ++y) {
+        for (int x = 10; x < 12; ++x) {
+            EXPECT_EQ(map.state(at(x, y)), TexelState::Inferred);
+            EXPECT_FLOAT_EQ(map.distance[at(x, y)], 2.0f);
+            EXPECT_LT(static_cast<float>(map.rgba[4 * at(x, y) + 3]), 1.0f);
+        }
+    }
+    for (int y = 30; y < 40; ++y) {
+        for (int x = 30; x < 40; ++x) {
+            EXPECT_EQ(map.state(at(x, y)), TexelState::Unknown);
+        }
+    }
+    EXPECT_EQ(map.state(at(0, 0)), TexelState::Surface);
+}
+
+TEST(ProbeBake, HoleOnASilhouetteTakesTheNearSurface) {
+    ProbeMap map(16, glm::dvec3(0.0));
+    for (int y = 0; y < 16; ++y) {
+        for (int x = 0; x < 16; ++x) {
+            const float d = x < 7 ? 1.0f : 5.0f; // near object left, far wall right
+            map.set_surface(oct::texel_index({x, y}, 16), d, glm::vec3(0.5f), glm::vec3(0, 0, 1),
+                            1.0f);
+        }
+    }
+    // A hole straddling the silhouette: its pull block holds both surfaces.
+    const std::size_t near_side = oct::texel_index({6, 5}, 16);
+    const std::size_t far_side = oct::texel_index({7, 5}, 16);
+    map.set_unknown(near_side);
+    map.set_unknown(far_side);
+    fill_small_holes(map, 4);
+    for (const std::size_t i : {near_side, far_side}) {
+        EXPECT_EQ(map.state(i), TexelState::Inferred);
+        EXPECT_FLOAT_EQ(map.distance[i], 1.0f); // the near surface, never a floating blend
+    }
+}
+
+TEST(ProbeBake, RejectsBadParameters) {
+    const BoxRoomScene scene;
+    const PointCloud cloud = scene.cloud(0.1f, glm::dvec3(0.0, 0.0, 1.0));
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    BakeSettings settings;
+    settings.resolution = 1;
+    EXPECT_THROW((void)bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings),
+                 InputError);
+    settings.resolution = 16;
+    EXPECT_THROW(
+        (void)bake_probe_from_cloud(cloud, geometry, glm::dvec3(std::nan(""), 0.0, 0.0), settings),
+        InputError);
+    EXPECT_THROW((void)bake_probe_from_cloud(cloud, LocalGeometry{}, glm::dvec3(0.0), settings),
+                 InputError);
+}
+
+TEST(ProbeBake, CancelledBakeThrows) {
+    const BoxRoomScene scene;
+    const PointCloud cloud = scene.cloud(0.05f, glm::dvec3(0.0, 0.0, 1.0));
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    Progress progress;
+    progress.request_cancel();
+    EXPECT_THROW(
+        (void)bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0, 0.0, 1.0), {}, &progress),
+        Cancelled);
+}
+
+TEST(LocalGeometry, NormalsFaceTheScannerAndSpacingMatchesThePattern) {
+    const BoxRoomScene scene;
+    const glm::dvec3 scanner(0.3, 0.2, 1.1);
+    const PointCloud cloud = scene.cloud(0.02f, scanner);
+    const LocalGeometry g = estimate_local_geometry(cloud, {});
+    std::size_t good = 0;
+    std::size_t wall_points = 0;
+    double spacing_sum = 0.0;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const glm::vec3 p = cloud.positions[i];
+        if (glm::length(p - scene.sphere_centre) < scene.sphere_radius + 0.01f) {
+            continue;
+        }
+        // Wall normals point into the room: toward the scanner.
+        ++wall_points;
+        const glm::vec3 to_scanner = glm::normalize(glm::vec3(scanner) - p);
+        good += glm::dot(g.normals[i], to_scanner) > 0.0f ? 1 : 0;
+        spacing_sum += g.spacing[i];
+        EXPECT_TRUE(g.oriented[i]);
+    }
+    EXPECT_EQ(good, wall_points);
+    const double mean_spacing = spacing_sum / static_cast<double>(wall_points);
+    EXPECT_GT(mean_spacing, 0.02); // 4 neighbours at the pitch, 2 at √2 pitch
+    EXPECT_LT(mean_spacing, 0.026);
+}
+
+TEST(LocalGeometry, SmallestEigenvectorOfKnownMatrices) {
+    const double diag[3][3] = {{3, 0, 0}, {0, 1e-9, 0}, {0, 0, 2}};
+    const glm::vec3 e = smallest_eigenvector(diag);
+    EXPECT_NEAR(std::abs(e.y), 1.0f, 1e-6f);
+    // A plane z = x: covariance of points spread in (1,0,1)/√2 and y.
+    const double plane[3][3] = {{1, 0, 1}, {0, 2, 0}, {1, 0, 1}};
+    const glm::vec3 n = smallest_eigenvector(plane);
+    EXPECT_NEAR(std::abs(glm::dot(n, glm::normalize(glm::vec3(1, 0, -1)))), 1.0f, 1e-6f);
+}
