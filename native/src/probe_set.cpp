@@ -35,6 +35,18 @@ json coverage_json(const ProbeCoverage& c) {
                 {"unknown", c.unknown}};
 }
 
+// Temporary files (NAME.tmp.PID.N) of a bake that was killed before it could rename them.
+void remove_stale_temporaries(const std::string& folder) {
+    std::error_code ec;
+    for (const auto& entry : fs::directory_iterator(folder, ec)) {
+        const std::string name = entry.path().filename().string();
+        const bool ours = name.rfind("probe_", 0) == 0 || name.rfind(kManifestName, 0) == 0;
+        if (ours && name.find(".tmp.") != std::string::npos) {
+            fs::remove(entry.path(), ec);
+        }
+    }
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -211,8 +223,10 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
                          {"points", cloud.size()}};
     manifest.sources = sources;
     // Files of an earlier set in this folder would be mixed with the new ones: the manifest
-    // goes first, and comes back only once every probe is written.
+    // goes first, and comes back only once every probe is written. Temporary files that a
+    // killed bake left behind go too.
     fs::remove(fs::path(folder) / kManifestName, ec);
+    remove_stale_temporaries(folder);
     for (std::size_t i = 0; i < placement.positions.size(); ++i) {
         if (progress != nullptr) {
             progress->throw_if_cancelled();

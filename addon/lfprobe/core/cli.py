@@ -1,0 +1,192 @@
+"""The lfprobe command line (bpy-free): ``./lfprobe SUBCOMMAND ...`` from the checkout.
+
+Subcommands: bake (scan files → probe set), info (what a probe set holds), bench (measured
+figures). Exit status: 0 success, 2 bad input, 1 other failure, 130 cancelled.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from typing import List, Optional, Sequence
+
+from . import native
+from .pipeline import BakeOptions, ProbePlacementSpec, bake_from_scans
+from .probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
+from .progress import TerminalProgress
+
+
+def _triples(values: Optional[List[List[float]]], option: str) -> List[List[float]]:
+    """`--probe X Y Z [X Y Z ...]`, given once or repeated, as a list of (x, y, z)."""
+    flat = [v for group in (values or []) for v in group]
+    if len(flat) % 3:
+        raise ValueError(f"{option} takes coordinates in threes (X Y Z), got {len(flat)} numbers")
+    return [flat[i : i + 3] for i in range(0, len(flat), 3)]
+
+
+def _mib(n: float) -> str:
+    return f"{n / (1024 * 1024):.2f} MiB"
+
+
+def _cmd_bake(args) -> int:
+    placement = ProbePlacementSpec(
+        positions=_triples(args.probe, "--probe"),
+        grid_min=args.grid_min,
+        grid_max=args.grid_max,
+        counts=args.counts,
+    )
+    options = BakeOptions(
+        resolution=args.res,
+        splat_scale=args.splat_scale,
+        hole_fill_texels=args.hole_fill,
+        normal_neighbours=args.normal_k,
+    )
+    progress = None if args.quiet else TerminalProgress()
+    summary = bake_from_scans(
+        args.scan,
+        args.out,
+        placement,
+        options,
+        scanners=_triples(args.scanner, "--scanner"),
+        columns=args.columns or "",
+        cache_dir="" if args.no_cache else args.cache,
+        progress=progress,
+    )
+    if args.json:
+        print(json.dumps(summary, indent=2))
+        return 0
+    cov = summary["mean_coverage"]
+    n = summary["probe_count"]
+    print(f"baked {n} probe(s) at {args.res}² from {summary['points']:,} points into {summary['folder']}")
+    print(
+        f"  normals {summary['normals_seconds']:.2f} s, bake {summary['bake_seconds']:.2f} s "
+        f"({summary['bake_seconds'] / n:.2f} s/probe), write {summary['write_seconds']:.2f} s"
+    )
+    print(
+        f"  coverage: surface {100 * cov['surface']:.2f}%, inferred {100 * cov['inferred']:.2f}%, "
+        f"unknown {100 * cov['unknown']:.2f}%, empty {100 * cov['empty']:.2f}%"
+    )
+    print(
+        f"  per probe: {_mib(summary['bytes_in_memory_per_probe'])} in memory, "
+        f"{_mib(summary['bytes_on_disk'] / n)} on disk"
+    )
+    return 0
+
+
+def _cmd_info(args) -> int:
+    info = summarize(args.folder)
+    if args.json:
+        if not args.probes:
+            info.pop("probes")
+        print(json.dumps(info, indent=2))
+        return 0 if not info["missing_files"] else 1
+    print(f"probe set {info['folder']} (format {info['format_version']})")
+    if info["layout"] == "grid":
+        g = info["grid"]
+        print(
+            f"  grid {g['counts'][0]}×{g['counts'][1]}×{g['counts'][2]}, origin {g['origin']}, "
+            f"spacing {g['spacing']} (local frame)"
+        )
+    print(f"  probes: {info['probe_count']}, resolution(s): {', '.join(map(str, info['resolutions']))}")
+    print(f"  world offset: {info['world_offset']}")
+    c = info["coverage"]
+    print(
+        f"  coverage (mean): surface {100 * c['surface']:.2f}%, inferred {100 * c['inferred']:.2f}%, "
+        f"unknown {100 * c['unknown']:.2f}%, empty {100 * c['empty']:.2f}%"
+    )
+    per = info["memory_bytes_per_probe"]
+    print(
+        f"  memory: {_mib(info['memory_bytes'])} ({_mib(per)} per probe with coarse levels); "
+        f"disk: {_mib(info['disk_bytes'])} ({_mib(info['disk_bytes_per_probe'])} per probe)"
+    )
+    if 2048 in info["resolutions"]:
+        print(f"  the paper's 2048² probe: {_mib(PAPER_BYTES_PER_2048_PROBE)}")
+    for source in info["sources"]:
+        print(f"  source: {source.get('path')} ({source.get('points', '?')} points, sha256 {str(source.get('sha256'))[:12]}…)")
+    if args.probes:
+        for p in info["probes"]:
+            cov = p.get("coverage", {})
+            print(
+                f"    {p['file']}: at {p['position']}, {p['resolution']}², "
+                f"surface {100 * cov.get('surface', 0):.1f}%, inferred {100 * cov.get('inferred', 0):.1f}%, "
+                f"unknown {100 * cov.get('unknown', 0):.1f}%"
+            )
+    for missing in info["missing_files"]:
+        print(f"  MISSING: {missing}")
+    return 0 if not info["missing_files"] else 1
+
+
+def _cmd_bench(args) -> int:
+    from . import bench
+
+    return bench.main(args)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(prog="lfprobe", description="Light field probes from laser scans.")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    bake = sub.add_parser("bake", help="bake a probe set from scan files")
+    bake.add_argument("--scan", nargs="+", required=True, metavar="FILE", help=".xyz/.txt/.pts/.ply scans, merged")
+    bake.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X",
+                      help="scanner positions X Y Z, one per scan file (world coordinates)")
+    bake.add_argument("--probe", nargs="+", type=float, action="append", metavar="X",
+                      help="probe positions X Y Z [X Y Z ...] (world coordinates)")
+    bake.add_argument("--grid-min", nargs=3, type=float, metavar=("X", "Y", "Z"))
+    bake.add_argument("--grid-max", nargs=3, type=float, metavar=("X", "Y", "Z"))
+    bake.add_argument("--counts", nargs=3, type=int, metavar=("NX", "NY", "NZ"))
+    bake.add_argument("--res", type=int, default=512, help="octahedral map resolution N (N×N texels)")
+    bake.add_argument("--out", required=True, metavar="DIR", help="probe set folder to write")
+    bake.add_argument("--columns", help='text scans: column names, e.g. "x y z i r g b"')
+    bake.add_argument("--cache", default=None, metavar="DIR", help="parsed-scan cache folder")
+    bake.add_argument("--no-cache", action="store_true", help="parse the scans without the cache")
+    bake.add_argument("--splat-scale", type=float, default=0.8, help="splat radius / point spacing")
+    bake.add_argument("--hole-fill", type=int, default=4, help="largest hole (texels) to fill")
+    bake.add_argument("--normal-k", type=int, default=12, help="neighbours for PCA normals")
+    bake.add_argument("--json", action="store_true", help="print the summary as JSON")
+    bake.add_argument("--quiet", action="store_true", help="no progress output")
+    bake.set_defaults(run=_cmd_bake)
+
+    info = sub.add_parser("info", help="what a probe set holds")
+    info.add_argument("folder", metavar="DIR")
+    info.add_argument("--json", action="store_true")
+    info.add_argument("--probes", action="store_true", help="list every probe")
+    info.set_defaults(run=_cmd_info)
+
+    bench = sub.add_parser("bench", help="benchmarks that print measured figures")
+    bench.add_argument("suite", choices=["core"], help="core: scan parsing and probe baking")
+    bench.add_argument("--points", type=int, default=10_000_000, help="points in the bake benchmark")
+    bench.add_argument("--res", type=int, default=2048, help="probe resolution in the bake benchmark")
+    bench.add_argument("--parse-points", type=int, default=2_000_000,
+                       help="points in the generated file for the parsing comparison")
+    bench.add_argument("--json", metavar="FILE", help="also write the figures as JSON")
+    bench.set_defaults(run=_cmd_bench)
+    return parser
+
+
+def main(argv: Optional[Sequence[str]] = None) -> int:
+    args = build_parser().parse_args(argv)
+    try:
+        return args.run(args)
+    except native.NativeModuleError as error:
+        print(f"lfprobe: {error}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("lfprobe: cancelled", file=sys.stderr)
+        return 130
+    except (ValueError, FileNotFoundError) as error:
+        print(f"lfprobe: error: {error}", file=sys.stderr)
+        return 2
+    except OSError as error:
+        print(f"lfprobe: error: {error}", file=sys.stderr)
+        return 1
+    except Exception as error:  # the native Cancelled, and anything unexpected: no traceback wall
+        if type(error).__name__ == "Cancelled":
+            print("lfprobe: cancelled", file=sys.stderr)
+            return 130
+        raise
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,39 @@
+"""Finds the native module and says plainly what is wrong when it cannot be imported."""
+
+from __future__ import annotations
+
+import glob
+import importlib
+import os
+import sys
+import sysconfig
+
+_PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+class NativeModuleError(ImportError):
+    """The native module is missing or was built for another Python."""
+
+
+def _diagnose() -> str:
+    built = sorted(glob.glob(os.path.join(_PACKAGE_DIR, "_native*.so")))
+    wanted = "_native" + (sysconfig.get_config_var("EXT_SUFFIX") or ".so")
+    if not built:
+        return (
+            f"lfprobe's native module is not built (no _native*.so in {_PACKAGE_DIR}). "
+            "Run `bash tools/setup.sh` in the lfprobe checkout to build it."
+        )
+    names = ", ".join(os.path.basename(b) for b in built)
+    return (
+        f"lfprobe's native module was built for another Python: found {names}, but Python "
+        f"{sys.version.split()[0]} needs {wanted}. Rebuild it with this Python "
+        "(tools/setup.sh builds for the system Python 3.11 that Blender uses)."
+    )
+
+
+def load():
+    """Returns the lfprobe._native module, or raises NativeModuleError with the reason."""
+    try:
+        return importlib.import_module("lfprobe._native")
+    except ImportError as error:
+        raise NativeModuleError(f"{_diagnose()} (import said: {error})") from error

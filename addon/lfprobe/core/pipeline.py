@@ -1,0 +1,123 @@
+"""The scan → probe set pipeline, as plain functions that the CLI and the add-on both call."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Callable, Optional, Sequence
+
+from . import native
+from .sources import default_cache_dir, describe_scan
+
+Progress = Optional[Callable[[float, str], object]]
+
+
+@dataclass
+class ProbePlacementSpec:
+    """Probes at explicit positions, or on a grid from min to max corner with counts per axis.
+    Coordinates are world coordinates (the scan files' own)."""
+
+    positions: Sequence[Sequence[float]] = ()
+    grid_min: Optional[Sequence[float]] = None
+    grid_max: Optional[Sequence[float]] = None
+    counts: Optional[Sequence[int]] = None
+
+    def validate(self) -> None:
+        grid = [self.grid_min, self.grid_max, self.counts]
+        if any(g is not None for g in grid):
+            if any(g is None for g in grid):
+                raise ValueError("a probe grid needs --grid-min, --grid-max and --counts")
+            if self.positions:
+                raise ValueError("give probe positions (--probe) or a grid, not both")
+            if len(self.counts) != 3 or any(int(c) < 1 for c in self.counts):
+                raise ValueError("--counts needs three whole numbers of at least 1")
+        elif not self.positions:
+            raise ValueError("no probes: give --probe X Y Z or a grid")
+
+
+@dataclass
+class BakeOptions:
+    resolution: int = 512
+    splat_scale: float = 0.8
+    hole_fill_texels: int = 4
+    normal_neighbours: int = 12
+    extra: dict = field(default_factory=dict)
+
+
+def load_scans(
+    paths: Sequence[str],
+    scanners: Sequence[Sequence[float]] = (),
+    columns: str = "",
+    cache_dir: Optional[str] = None,
+    world_offset: Optional[Sequence[float]] = None,
+    progress: Progress = None,
+):
+    """Reads and merges scan files into one native PointCloud (cached; see default_cache_dir).
+    scanners: world positions, one per file, or none."""
+    _native = native.load()
+    if scanners and len(scanners) != len(paths):
+        raise ValueError(
+            f"{len(scanners)} scanner positions for {len(paths)} scan files: give one per file"
+        )
+    return _native.load_scans(
+        [str(p) for p in paths],
+        scanners=[list(map(float, s)) for s in scanners],
+        world_offset=None if world_offset is None else list(map(float, world_offset)),
+        columns=columns,
+        cache_dir=default_cache_dir() if cache_dir is None else cache_dir,
+        progress=progress,
+    )
+
+
+def bake_from_cloud(
+    cloud,
+    out_dir: str,
+    placement: ProbePlacementSpec,
+    options: BakeOptions,
+    sources: Sequence[dict] = (),
+    progress: Progress = None,
+    start_only: bool = False,
+):
+    """Bakes a probe set from a native PointCloud. With start_only, returns the running Job
+    (for Blender's modal operator) instead of waiting for the summary."""
+    _native = native.load()
+    placement.validate()
+    kwargs = dict(
+        resolution=int(options.resolution),
+        positions=[list(map(float, p)) for p in placement.positions],
+        grid_min=None if placement.grid_min is None else list(map(float, placement.grid_min)),
+        grid_max=None if placement.grid_max is None else list(map(float, placement.grid_max)),
+        counts=None if placement.counts is None else [int(c) for c in placement.counts],
+        sources_json=json.dumps(list(sources)),
+        splat_scale=float(options.splat_scale),
+        hole_fill_texels=int(options.hole_fill_texels),
+        normal_neighbours=int(options.normal_neighbours),
+    )
+    if start_only:
+        return _native.start_bake_probe_set(cloud, out_dir, **kwargs)
+    return _native.bake_probe_set(cloud, out_dir, progress=progress, **kwargs)
+
+
+def bake_from_scans(
+    scan_paths: Sequence[str],
+    out_dir: str,
+    placement: ProbePlacementSpec,
+    options: BakeOptions,
+    scanners: Sequence[Sequence[float]] = (),
+    columns: str = "",
+    cache_dir: Optional[str] = None,
+    progress: Progress = None,
+) -> dict:
+    """Scan files → probe set folder. Returns the bake summary with the cloud's size and offset."""
+    placement.validate()
+    cloud = load_scans(scan_paths, scanners, columns, cache_dir, progress=progress)
+    sources = []
+    for path, scan in zip(scan_paths, cloud.scans):
+        offset = cloud.world_offset
+        scanner = scan["scanner"]
+        world_scanner = None if scanner is None else [s + o for s, o in zip(scanner, offset)]
+        sources.append(describe_scan(path, scan["points"], world_scanner))
+    summary = bake_from_cloud(cloud, out_dir, placement, options, sources, progress)
+    summary["points"] = len(cloud)
+    summary["world_offset"] = list(cloud.world_offset)
+    return summary

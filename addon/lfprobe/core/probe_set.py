@@ -1,0 +1,74 @@
+"""Reading a probe set folder (DESIGN.md §3) without the native module: the manifest and the
+facts `lfprobe info` prints."""
+
+from __future__ import annotations
+
+import json
+import os
+
+MANIFEST = "manifest.json"
+PAPER_BYTES_PER_2048_PROBE = 24.375 * 1024 * 1024  # the paper's figure: 2048² + 128² maps
+
+
+def read_manifest(folder: str) -> dict:
+    path = os.path.join(folder, MANIFEST)
+    if not os.path.isfile(path):
+        raise FileNotFoundError(
+            f"{path}: no probe set manifest (not a probe set, or its bake did not finish)"
+        )
+    with open(path, encoding="utf-8") as stream:
+        try:
+            manifest = json.load(stream)
+        except json.JSONDecodeError as error:
+            raise ValueError(f"{path}: invalid JSON: {error}") from error
+    if manifest.get("format") != "lfprobe-probe-set":
+        raise ValueError(f'{path}: not an lfprobe probe set (expected "format": "lfprobe-probe-set")')
+    return manifest
+
+
+def coarse_level_bytes(resolution: int) -> int:
+    """Bytes of the min-distance levels derived on load (float32, halving to 1×1)."""
+    total = 0
+    n = resolution
+    while n > 1:
+        n = (n + 1) // 2
+        total += n * n * 4
+    return total
+
+
+def summarize(folder: str) -> dict:
+    """What a probe set holds: probes, resolutions, coverage and memory, as plain data."""
+    manifest = read_manifest(folder)
+    probes = manifest["probes"]
+    disk = 0
+    missing = []
+    for probe in probes:
+        path = os.path.join(folder, probe["file"])
+        if os.path.isfile(path):
+            disk += os.path.getsize(path)
+        else:
+            missing.append(probe["file"])
+    resolutions = sorted({p["resolution"] for p in probes})
+    memory = sum(p.get("memory_bytes", 0) + coarse_level_bytes(p["resolution"]) for p in probes)
+    coverage = {}
+    for key in ("surface", "inferred", "empty", "unknown"):
+        values = [p.get("coverage", {}).get(key, 0.0) for p in probes]
+        coverage[key] = sum(values) / len(values) if values else 0.0
+    return {
+        "folder": os.path.abspath(folder),
+        "format_version": manifest.get("format_version"),
+        "layout": manifest.get("layout"),
+        "grid": manifest.get("grid"),
+        "world_offset": manifest.get("world_offset"),
+        "probe_count": len(probes),
+        "resolutions": resolutions,
+        "coverage": coverage,
+        "memory_bytes": memory,
+        "memory_bytes_per_probe": memory / len(probes) if probes else 0,
+        "disk_bytes": disk,
+        "disk_bytes_per_probe": disk / len(probes) if probes else 0,
+        "missing_files": missing,
+        "bake": manifest.get("bake", {}),
+        "sources": manifest.get("sources", []),
+        "probes": probes,
+    }

@@ -1,0 +1,510 @@
+// lfprobe._native: a thin binding over the native core. numpy arrays in and out, long work
+// run as Jobs with the GIL released, native errors turned into Python exceptions. No
+// algorithm lives here.
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <pybind11/functional.h>
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "job.hpp"
+#include "lfprobe/error.hpp"
+#include "lfprobe/min_distance_pyramid.hpp"
+#include "lfprobe/octahedral.hpp"
+#include "lfprobe/probe_exr.hpp"
+#include "lfprobe/probe_set.hpp"
+#include "lfprobe/scan_cache.hpp"
+#include "lfprobe/scan_reader.hpp"
+
+namespace py = pybind11;
+using namespace lfprobe;
+using lfprobe::python::Job;
+
+namespace {
+
+using FloatArray = py::array_t<float, py::array::c_style | py::array::forcecast>;
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+
+// A read-write (n, 3) float32 view of a vector of glm::vec3 that keeps `owner` alive.
+py::array vec3_view(std::vector<glm::vec3>& v, const py::object& owner) {
+    return py::array_t<float>({static_cast<py::ssize_t>(v.size()), py::ssize_t{3}},
+                              {py::ssize_t{sizeof(glm::vec3)}, py::ssize_t{sizeof(float)}},
+                              v.empty() ? nullptr : &v[0].x, owner);
+}
+
+template <class T>
+py::array vector_view(std::vector<T>& v, const py::object& owner) {
+    return py::array_t<T>({static_cast<py::ssize_t>(v.size())}, {py::ssize_t{sizeof(T)}},
+                          v.empty() ? nullptr : v.data(), owner);
+}
+
+std::vector<glm::vec3> vec3_from(const FloatArray& a, const char* what, py::ssize_t rows) {
+    if (a.ndim() != 2 || a.shape(1) != 3 || (rows >= 0 && a.shape(0) != rows)) {
+        throw InputError(std::string(what) + ": expected an array of shape (" +
+                         (rows >= 0 ? std::to_string(rows) : std::string("n")) + ", 3)");
+    }
+    std::vector<glm::vec3> out(static_cast<std::size_t>(a.shape(0)));
+    if (!out.empty()) {
+        std::memcpy(&out[0].x, a.data(), out.size() * sizeof(glm::vec3));
+    }
+    return out;
+}
+
+glm::dvec3 dvec3_from(const std::vector<double>& v, const char* what) {
+    if (v.size() != 3) {
+        throw InputError(std::string(what) + ": expected three numbers (x, y, z)");
+    }
+    return {v[0], v[1], v[2]};
+}
+
+py::dict coverage_dict(const ProbeCoverage& c) {
+    py::dict d;
+    d["surface"] = c.surface;
+    d["inferred"] = c.inferred;
+    d["empty"] = c.empty;
+    d["unknown"] = c.unknown;
+    return d;
+}
+
+PointCloud load_scans(const std::vector<std::string>& paths,
+                      const std::vector<std::vector<double>>& scanners,
+                      const std::optional<std::vector<double>>& world_offset,
+                      const std::string& columns, const std::string& cache_dir,
+                      Progress& progress) {
+    if (paths.empty()) {
+        throw InputError("load_scans: no scan files given");
+    }
+    ScanReadOptions options;
+    options.columns = columns;
+    std::vector<ScanFile> files;
+    for (const std::string& path : paths) {
+        files.push_back(read_scan_file_cached(path, options, cache_dir, &progress));
+    }
+    MergeOptions merge;
+    for (const auto& s : scanners) {
+        merge.scanners.push_back(dvec3_from(s, "scanner"));
+    }
+    if (world_offset) {
+        merge.world_offset = dvec3_from(*world_offset, "world_offset");
+        merge.force_world_offset = true;
+    }
+    return merge_scans(std::move(files), merge);
+}
+
+struct BakeRequest {
+    std::string folder;
+    int resolution = 512;
+    std::vector<std::vector<double>> positions;
+    std::optional<std::vector<double>> grid_min;
+    std::optional<std::vector<double>> grid_max;
+    std::optional<std::vector<int>> counts;
+    bool positions_in_world = true;
+    std::string sources_json = "[]";
+    BakeSettings settings;
+    LocalGeometryOptions geometry;
+};
+
+ProbePlacement placement_of(const BakeRequest& r, const glm::dvec3& world_offset) {
+    const glm::dvec3 shift = r.positions_in_world ? world_offset : glm::dvec3(0.0);
+    if (r.grid_min || r.grid_max || r.counts) {
+        if (!(r.grid_min && r.grid_max && r.counts) || r.counts->size() != 3) {
+            throw InputError("bake: a grid needs grid_min, grid_max and three counts");
+        }
+        if (!r.positions.empty()) {
+            throw InputError("bake: give probe positions or a grid, not both");
+        }
+        return ProbePlacement::from_grid(
+            ProbeGrid::spanning(dvec3_from(*r.grid_min, "grid_min") - shift,
+                                dvec3_from(*r.grid_max, "grid_max") - shift,
+                                {(*r.counts)[0], (*r.counts)[1], (*r.counts)[2]}));
+    }
+    std::vector<glm::dvec3> local;
+    for (const auto& p : r.positions) {
+        local.push_back(dvec3_from(p, "probe position") - shift);
+    }
+    return ProbePlacement::from_positions(std::move(local));
+}
+
+py::object summary_dict(BakeSummary&& s) {
+    py::dict d;
+    d["folder"] = s.folder;
+    d["probe_count"] = s.probe_count;
+    d["normals_seconds"] = s.normals_seconds;
+    d["bake_seconds"] = s.bake_seconds;
+    d["write_seconds"] = s.write_seconds;
+    d["mean_coverage"] = coverage_dict(s.mean_coverage);
+    d["bytes_in_memory_per_probe"] = s.bytes_in_memory_per_probe;
+    d["bytes_on_disk"] = s.bytes_on_disk;
+    return d;
+}
+
+std::unique_ptr<Job> start_bake(std::shared_ptr<PointCloud> cloud, BakeRequest request) {
+    const ProbePlacement placement = placement_of(request, cloud->world_offset);
+    nlohmann::json sources;
+    try {
+        sources = nlohmann::json::parse(request.sources_json);
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(std::string("bake: sources_json is not valid JSON (") + e.what() + ")");
+    }
+    return std::make_unique<Job>(std::function<BakeSummary(Progress&)>(
+                                     [cloud, request, placement, sources](Progress& progress) {
+                                         return bake_probe_set_from_cloud(
+                                             *cloud, placement, request.settings, request.geometry,
+                                             request.folder, sources, &progress);
+                                     }),
+                                 std::function<py::object(BakeSummary &&)>(summary_dict));
+}
+
+std::unique_ptr<Job> start_load(std::vector<std::string> paths,
+                                std::vector<std::vector<double>> scanners,
+                                std::optional<std::vector<double>> world_offset,
+                                std::string columns, std::string cache_dir) {
+    return std::make_unique<Job>(std::function<PointCloud(Progress&)>([=](Progress& progress) {
+                                     return load_scans(paths, scanners, world_offset, columns,
+                                                       cache_dir, progress);
+                                 }),
+                                 std::function<py::object(PointCloud &&)>([](PointCloud&& c) {
+                                     return py::cast(std::make_shared<PointCloud>(std::move(c)));
+                                 }));
+}
+
+BakeRequest make_request(const std::string& folder, int resolution,
+                         std::vector<std::vector<double>> positions,
+                         std::optional<std::vector<double>> grid_min,
+                         std::optional<std::vector<double>> grid_max,
+                         std::optional<std::vector<int>> counts, bool positions_in_world,
+                         const std::string& sources_json, float splat_scale, int hole_fill_texels,
+                         int max_splat_radius_texels, int normal_neighbours) {
+    BakeRequest r;
+    r.folder = folder;
+    r.resolution = resolution;
+    r.positions = std::move(positions);
+    r.grid_min = std::move(grid_min);
+    r.grid_max = std::move(grid_max);
+    r.counts = std::move(counts);
+    r.positions_in_world = positions_in_world;
+    r.sources_json = sources_json;
+    r.settings.resolution = resolution;
+    r.settings.splat_scale = splat_scale;
+    r.settings.hole_fill_texels = hole_fill_texels;
+    r.settings.max_splat_radius_texels = max_splat_radius_texels;
+    r.geometry.normal_neighbours = normal_neighbours;
+    return r;
+}
+
+py::dict probe_dict(ProbeMap&& map) {
+    const auto n = static_cast<py::ssize_t>(map.resolution);
+    py::array_t<float> rgba({n, n, py::ssize_t{4}});
+    py::array_t<float> distance({n, n});
+    py::array_t<float> normal({n, n, py::ssize_t{3}});
+    py::array_t<std::uint8_t> state({n, n});
+    float* prgba = rgba.mutable_data();
+    float* pnormal = normal.mutable_data();
+    std::uint8_t* pstate = state.mutable_data();
+    for (std::size_t i = 0; i < map.rgba.size(); ++i) {
+        prgba[i] = static_cast<float>(map.rgba[i]);
+    }
+    for (std::size_t i = 0; i < map.normal.size(); ++i) {
+        pnormal[i] = static_cast<float>(map.normal[i]);
+    }
+    std::memcpy(distance.mutable_data(), map.distance.data(), map.distance.size() * sizeof(float));
+    for (std::size_t i = 0; i < map.texel_count(); ++i) {
+        pstate[i] = static_cast<std::uint8_t>(map.state(i));
+    }
+    py::dict d;
+    d["resolution"] = map.resolution;
+    d["position"] = py::make_tuple(map.position.x, map.position.y, map.position.z);
+    d["rgba"] = rgba;
+    d["distance"] = distance;
+    d["normal"] = normal;
+    d["state"] = state;
+    d["coverage"] = coverage_dict(coverage_of(map));
+    d["memory_bytes"] = map.memory_bytes();
+    return d;
+}
+
+} // namespace
+
+PYBIND11_MODULE(_native, m) {
+    m.doc() = "lfprobe native core: scan import, probe baking, probe sets";
+    m.attr("__version__") = LFPROBE_VERSION;
+    m.attr("PROBE_SET_FORMAT_VERSION") = kProbeSetFormatVersion;
+
+    static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
+    static py::exception<IoError> io_error(m, "NativeIOError", PyExc_OSError);
+    static py::exception<Cancelled> cancelled(m, "Cancelled", PyExc_Exception);
+    py::register_exception_translator([](std::exception_ptr p) {
+        try {
+            if (p) {
+                std::rethrow_exception(p);
+            }
+        } catch (const InputError& e) {
+            input_error(e.what());
+        } catch (const IoError& e) {
+            io_error(e.what());
+        } catch (const Cancelled& e) {
+            cancelled(e.what());
+        }
+    });
+
+    py::enum_<TexelState>(m, "TexelState")
+        .value("UNKNOWN", TexelState::Unknown)
+        .value("EMPTY", TexelState::Empty)
+        .value("SURFACE", TexelState::Surface)
+        .value("INFERRED", TexelState::Inferred);
+
+    m.def(
+        "oct_encode",
+        [](const FloatArray& dirs) {
+            const std::vector<glm::vec3> d = vec3_from(dirs, "oct_encode", -1);
+            py::array_t<float> uv({static_cast<py::ssize_t>(d.size()), py::ssize_t{2}});
+            float* out = uv.mutable_data();
+            for (std::size_t i = 0; i < d.size(); ++i) {
+                const glm::vec2 e = oct::encode_checked(d[i]);
+                out[2 * i] = e.x;
+                out[2 * i + 1] = e.y;
+            }
+            return uv;
+        },
+        py::arg("directions"), "Octahedral map coordinates uv in [0,1]² of (n, 3) directions.");
+    m.def(
+        "oct_decode",
+        [](const py::array_t<float, py::array::c_style | py::array::forcecast>& uv) {
+            if (uv.ndim() != 2 || uv.shape(1) != 2) {
+                throw InputError("oct_decode: expected an array of shape (n, 2)");
+            }
+            const auto n = uv.shape(0);
+            py::array_t<float> dirs({n, py::ssize_t{3}});
+            const float* in = uv.data();
+            float* out = dirs.mutable_data();
+            for (py::ssize_t i = 0; i < n; ++i) {
+                const glm::vec3 d = oct::decode({in[2 * i], in[2 * i + 1]});
+                out[3 * i] = d.x;
+                out[3 * i + 1] = d.y;
+                out[3 * i + 2] = d.z;
+            }
+            return dirs;
+        },
+        py::arg("uv"), "Unit directions of (n, 2) octahedral map coordinates.");
+
+    py::class_<PointCloud, std::shared_ptr<PointCloud>>(m, "PointCloud")
+        .def("__len__", &PointCloud::size)
+        .def_property_readonly(
+            "positions",
+            [](py::object self) { return vec3_view(self.cast<PointCloud&>().positions, self); })
+        .def_property_readonly("colors",
+                               [](py::object self) -> py::object {
+                                   auto& c = self.cast<PointCloud&>();
+                                   return c.has_colors() ? py::object(vec3_view(c.colors, self))
+                                                         : py::none();
+                               })
+        .def_property_readonly("normals",
+                               [](py::object self) -> py::object {
+                                   auto& c = self.cast<PointCloud&>();
+                                   return c.has_normals() ? py::object(vec3_view(c.normals, self))
+                                                          : py::none();
+                               })
+        .def_property_readonly("intensities",
+                               [](py::object self) -> py::object {
+                                   auto& c = self.cast<PointCloud&>();
+                                   return c.intensities.empty()
+                                              ? py::none()
+                                              : py::object(vector_view(c.intensities, self));
+                               })
+        .def_property_readonly(
+            "scan_index",
+            [](py::object self) { return vector_view(self.cast<PointCloud&>().scan_index, self); })
+        .def_property_readonly("world_offset",
+                               [](const PointCloud& c) {
+                                   return py::make_tuple(c.world_offset.x, c.world_offset.y,
+                                                         c.world_offset.z);
+                               })
+        .def_property_readonly(
+            "scans",
+            [](const PointCloud& c) {
+                py::list out;
+                for (const ScanSource& s : c.scans) {
+                    py::dict d;
+                    d["path"] = s.path;
+                    d["points"] = s.point_count;
+                    d["scanner"] =
+                        s.has_scanner
+                            ? py::object(py::make_tuple(s.scanner.x, s.scanner.y, s.scanner.z))
+                            : py::object(py::none());
+                    out.append(d);
+                }
+                return out;
+            },
+            "One dict per scan: path, points, scanner (local frame) or None.")
+        .def_static(
+            "from_arrays",
+            [](const FloatArray& positions, std::optional<FloatArray> colors,
+               std::optional<FloatArray> normals,
+               std::optional<py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast>>
+                   scan_index,
+               const std::vector<std::optional<std::vector<double>>>& scanners,
+               const std::vector<double>& world_offset) {
+                auto cloud = std::make_shared<PointCloud>();
+                cloud->positions = vec3_from(positions, "positions", -1);
+                const auto n = static_cast<py::ssize_t>(cloud->positions.size());
+                for (const glm::vec3& p : cloud->positions) {
+                    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+                        throw InputError("positions: NaN or infinite coordinate");
+                    }
+                }
+                if (colors) {
+                    cloud->colors = vec3_from(*colors, "colors", n);
+                }
+                if (normals) {
+                    cloud->normals = vec3_from(*normals, "normals", n);
+                }
+                cloud->world_offset = dvec3_from(world_offset, "world_offset");
+                const std::size_t scan_count = std::max<std::size_t>(1, scanners.size());
+                if (scan_index) {
+                    if (scan_index->ndim() != 1 || scan_index->shape(0) != n) {
+                        throw InputError("scan_index: expected shape (n,)");
+                    }
+                    cloud->scan_index.assign(scan_index->data(), scan_index->data() + n);
+                    for (const std::uint32_t s : cloud->scan_index) {
+                        if (s >= scan_count) {
+                            throw InputError("scan_index: " + std::to_string(s) +
+                                             " names no scan (give one scanner entry per scan)");
+                        }
+                    }
+                } else {
+                    cloud->scan_index.assign(static_cast<std::size_t>(n), 0);
+                }
+                cloud->scans.resize(scan_count);
+                for (std::size_t s = 0; s < scan_count; ++s) {
+                    cloud->scans[s].path = "array";
+                    if (s < scanners.size() && scanners[s]) {
+                        cloud->scans[s].scanner = dvec3_from(*scanners[s], "scanner");
+                        cloud->scans[s].has_scanner = true;
+                    }
+                }
+                for (const std::uint32_t s : cloud->scan_index) {
+                    ++cloud->scans[s].point_count;
+                }
+                return cloud;
+            },
+            py::arg("positions"), py::arg("colors") = py::none(), py::arg("normals") = py::none(),
+            py::arg("scan_index") = py::none(),
+            py::arg("scanners") = std::vector<std::optional<std::vector<double>>>{},
+            py::arg("world_offset") = std::vector<double>{0.0, 0.0, 0.0},
+            "A cloud from arrays in the local frame: positions (n,3) float32, linear colours, "
+            "normals, scan index per point; scanners: one (x,y,z) or None per scan, local frame.");
+
+    py::class_<Job>(m, "Job", "Native work running off the Python thread.")
+        .def_property_readonly("fraction", [](const Job& j) { return j.progress().fraction(); })
+        .def_property_readonly("stage", [](const Job& j) { return j.progress().stage(); })
+        .def_property_readonly("done", &Job::done)
+        .def("cancel", &Job::cancel, "Ask the work to stop; result() then raises Cancelled.")
+        .def("wait", &Job::wait, py::arg("seconds") = -1.0,
+             "Wait (GIL released) up to `seconds` (forever when negative); True when done.")
+        .def("result", &Job::result, "The result, or the native error as an exception.")
+        .def("run", &Job::run, py::arg("callback") = py::none(),
+             "Run to the end, calling callback(fraction, stage) every 0.1 s; returning False "
+             "from it cancels.");
+
+    m.def("start_load_scans", &start_load, py::arg("paths"),
+          py::arg("scanners") = std::vector<std::vector<double>>{},
+          py::arg("world_offset") = py::none(), py::arg("columns") = "", py::arg("cache_dir") = "",
+          "Start reading and merging scan files; the Job's result is a PointCloud. scanners are "
+          "world coordinates, one per file.");
+    m.def(
+        "load_scans",
+        [](std::vector<std::string> paths, std::vector<std::vector<double>> scanners,
+           std::optional<std::vector<double>> world_offset, std::string columns,
+           std::string cache_dir, const py::object& progress) {
+            auto job = start_load(std::move(paths), std::move(scanners), std::move(world_offset),
+                                  std::move(columns), std::move(cache_dir));
+            return job->run(progress);
+        },
+        py::arg("paths"), py::arg("scanners") = std::vector<std::vector<double>>{},
+        py::arg("world_offset") = py::none(), py::arg("columns") = "", py::arg("cache_dir") = "",
+        py::arg("progress") = py::none(), "load_scans run to the end; see start_load_scans.");
+
+    auto start_bake_fn =
+        [](std::shared_ptr<PointCloud> cloud, const std::string& folder, int resolution,
+           std::vector<std::vector<double>> positions, std::optional<std::vector<double>> grid_min,
+           std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
+           bool positions_in_world, const std::string& sources_json, float splat_scale,
+           int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours) {
+            return start_bake(std::move(cloud),
+                              make_request(folder, resolution, std::move(positions),
+                                           std::move(grid_min), std::move(grid_max),
+                                           std::move(counts), positions_in_world, sources_json,
+                                           splat_scale, hole_fill_texels, max_splat_radius_texels,
+                                           normal_neighbours));
+        };
+    const BakeSettings defaults;
+    const LocalGeometryOptions geometry_defaults;
+    m.def("start_bake_probe_set", start_bake_fn, py::arg("cloud"), py::arg("folder"),
+          py::arg("resolution") = defaults.resolution,
+          py::arg("positions") = std::vector<std::vector<double>>{},
+          py::arg("grid_min") = py::none(), py::arg("grid_max") = py::none(),
+          py::arg("counts") = py::none(), py::arg("positions_in_world") = true,
+          py::arg("sources_json") = "[]", py::arg("splat_scale") = defaults.splat_scale,
+          py::arg("hole_fill_texels") = defaults.hole_fill_texels,
+          py::arg("max_splat_radius_texels") = defaults.max_splat_radius_texels,
+          py::arg("normal_neighbours") = geometry_defaults.normal_neighbours,
+          "Start baking a probe set from a cloud into `folder`; positions or grid corners are "
+          "world coordinates unless positions_in_world is False. The Job's result is a summary "
+          "dict.");
+    m.def(
+        "bake_probe_set",
+        [start_bake_fn](
+            std::shared_ptr<PointCloud> cloud, const std::string& folder, int resolution,
+            std::vector<std::vector<double>> positions, std::optional<std::vector<double>> grid_min,
+            std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
+            bool positions_in_world, const std::string& sources_json, float splat_scale,
+            int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours,
+            const py::object& progress) {
+            auto job = start_bake_fn(std::move(cloud), folder, resolution, std::move(positions),
+                                     std::move(grid_min), std::move(grid_max), std::move(counts),
+                                     positions_in_world, sources_json, splat_scale,
+                                     hole_fill_texels, max_splat_radius_texels, normal_neighbours);
+            return job->run(progress);
+        },
+        py::arg("cloud"), py::arg("folder"), py::arg("resolution") = defaults.resolution,
+        py::arg("positions") = std::vector<std::vector<double>>{}, py::arg("grid_min") = py::none(),
+        py::arg("grid_max") = py::none(), py::arg("counts") = py::none(),
+        py::arg("positions_in_world") = true, py::arg("sources_json") = "[]",
+        py::arg("splat_scale") = defaults.splat_scale,
+        py::arg("hole_fill_texels") = defaults.hole_fill_texels,
+        py::arg("max_splat_radius_texels") = defaults.max_splat_radius_texels,
+        py::arg("normal_neighbours") = geometry_defaults.normal_neighbours,
+        py::arg("progress") = py::none(), "bake run to the end; see start_bake_probe_set.");
+
+    m.def(
+        "read_probe", [](const std::string& path) { return probe_dict(read_probe_exr(path)); },
+        py::arg("path"),
+        "One probe EXR as arrays: rgba (n,n,4), distance (n,n), normal (n,n,3), state (n,n) "
+        "uint8 TexelState values, plus resolution, position, coverage, memory_bytes.");
+    m.def(
+        "coarse_min_distance",
+        [](const py::array_t<float, py::array::c_style | py::array::forcecast>& distance,
+           int coarsest) {
+            if (distance.ndim() != 2 || distance.shape(0) != distance.shape(1)) {
+                throw InputError("coarse_min_distance: expected a square (n, n) array");
+            }
+            const int n = static_cast<int>(distance.shape(0));
+            const std::vector<float> fine(distance.data(),
+                                          distance.data() + static_cast<std::size_t>(n) * n);
+            const MinDistancePyramid pyramid(fine, n, coarsest);
+            py::list levels;
+            for (const MinDistanceLevel& level : pyramid.levels()) {
+                const auto r = static_cast<py::ssize_t>(level.resolution);
+                py::array_t<float> a({r, r});
+                std::memcpy(a.mutable_data(), level.min_distance.data(),
+                            level.min_distance.size() * sizeof(float));
+                levels.append(a);
+            }
+            return levels;
+        },
+        py::arg("distance"), py::arg("coarsest") = 1,
+        "The min-distance levels of a distance map, finest first.");
+}

@@ -1,0 +1,117 @@
+"""./lfprobe bake and ./lfprobe info end to end, on the real scans in ../shared/data."""
+
+import json
+import os
+import signal
+import subprocess
+import time
+
+import numpy as np
+import pytest
+
+from conftest import ROOT, run_cli
+
+
+def test_bake_and_info_on_the_pump_room_scan(shared_data, tmp_path):
+    scan = os.path.join(shared_data, "scans", "pumpA_xyzrgb.xyz")
+    out = tmp_path / "pump"
+    result = run_cli("bake", "--scan", scan, "--scanner", 0, 0, 0, "--grid-min", -1, -1, -0.5,
+                     "--grid-max", 1, 1, -0.5, "--counts", 2, 3, 1, "--res", 64, "--out", out,
+                     "--cache", tmp_path / "cache", "--quiet", check=True)
+    assert "baked 6 probe(s) at 64²" in result.stdout
+    manifest = json.loads((out / "manifest.json").read_text())
+    assert manifest["format"] == "lfprobe-probe-set" and manifest["format_version"] == 1
+    assert manifest["layout"] == "grid" and manifest["grid"]["counts"] == [2, 3, 1]
+    assert len(manifest["probes"]) == 6
+    source = manifest["sources"][0]
+    assert source["points"] == 155201 and len(source["sha256"]) == 64
+    assert source["scanner"] == [0.0, 0.0, 0.0]
+    info = run_cli("info", out, check=True).stdout
+    assert "probes: 6" in info and "resolution(s): 64" in info
+    as_json = json.loads(run_cli("info", out, "--json", check=True).stdout)
+    assert as_json["probe_count"] == 6
+    assert as_json["disk_bytes"] > 0 and as_json["memory_bytes_per_probe"] > 64 * 64 * 18
+    assert set(as_json["coverage"]) == {"surface", "inferred", "empty", "unknown"}
+
+
+def test_pump_room_scan_at_its_scanner_covers_every_swept_direction(native, shared_data, tmp_path):
+    """Baked at the scanner's own position, every direction the scanner swept has data."""
+    cloud = native.load_scans([os.path.join(shared_data, "scans", "pumpA_xyzrgb.xyz")],
+                              scanners=[[0, 0, 0]], cache_dir="")
+    res = 256
+    native.bake_probe_set(cloud, str(tmp_path / "p"), resolution=res, positions=[[0, 0, 0]])
+    probe = native.read_probe(str(tmp_path / "p" / "probe_00000.exr"))
+    p = cloud.positions.astype(np.float64)
+    elevation = np.arcsin(p[:, 2] / np.linalg.norm(p, axis=1))
+    # The texels whose direction lies inside the swept band of elevations, a texel in from its
+    # edges (about 1.4 texels of angle at this resolution), count.
+    centres = (np.stack(np.meshgrid(np.arange(res), np.arange(res), indexing="xy"), -1) + 0.5) / res
+    dirs = native.oct_decode(centres.reshape(-1, 2).astype(np.float32))
+    texel_elevation = np.arcsin(np.clip(dirs[:, 2], -1, 1))
+    margin = 2.0 * np.pi / (2 * res) * 2
+    swept = (texel_elevation > elevation.min() + margin) & (texel_elevation < elevation.max() - margin)
+    state = probe["state"].reshape(-1)
+    covered = np.isin(state, [2, 3])  # SURFACE, INFERRED
+    coverage = covered[swept].mean()
+    print(f"pump room at its scanner, {res}²: swept elevations "
+          f"{np.degrees(elevation.min()):.1f}° to {np.degrees(elevation.max()):.1f}°, "
+          f"{swept.sum()} texels, coverage {100 * coverage:.3f}%")
+    assert coverage > 0.999
+
+
+def test_georeferenced_lidar_keeps_millimetre_precision(native, shared_data):
+    path = os.path.join(shared_data, "scans", "autzen_trim_xyzrgb.xyz")
+    cloud = native.load_scans([path], cache_dir="")
+    offset = np.array(cloud.world_offset)
+    assert np.abs(offset).max() > 1e5  # a real offset was chosen
+    assert np.abs(cloud.positions).max() < 1e4
+    truth = np.loadtxt(path, usecols=(0, 1, 2))
+    world = cloud.positions.astype(np.float64) + offset
+    error = np.abs(world - truth).max()
+    print(f"autzen: offset {offset}, worst error after the offset {error:.2e} units")
+    assert error < 1e-3
+
+
+def test_bad_scan_gives_a_clear_error_and_no_probe_set(tmp_path):
+    bad = tmp_path / "bad.xyz"
+    bad.write_text("1 2 3 255 0 0\n4 5 six 0 255 0\n")
+    out = tmp_path / "out"
+    result = run_cli("bake", "--scan", bad, "--probe", 0, 0, 0, "--out", out, "--res", 16, "--no-cache")
+    assert result.returncode == 2
+    assert "bad.xyz" in result.stderr and ":2" in result.stderr and "six" in result.stderr
+    assert not (out / "manifest.json").exists()
+    missing = run_cli("bake", "--scan", tmp_path / "nope.xyz", "--probe", 0, 0, 0, "--out", out)
+    assert missing.returncode != 0 and "nope.xyz" in missing.stderr
+    no_probe = run_cli("bake", "--scan", bad, "--out", out)
+    assert no_probe.returncode == 2 and "no probes" in no_probe.stderr
+    not_a_set = run_cli("info", tmp_path)
+    assert not_a_set.returncode == 2 and "manifest" in not_a_set.stderr
+
+
+def test_killed_bake_leaves_no_partial_probe(native, tmp_path):
+    """SIGKILL in the middle of a bake: every probe file present is complete, there is no
+    manifest, and the next bake in the folder clears the leftovers."""
+    scan = tmp_path / "room.xyz"
+    g = np.arange(-2, 2, 0.02)
+    yy, zz = np.meshgrid(g, g)
+    wall = np.column_stack([np.full(yy.size, 3.0), yy.ravel(), zz.ravel() + 1])
+    np.savetxt(scan, np.column_stack([wall, np.full((yy.size, 3), 128)]), fmt="%.3f")
+    out = tmp_path / "set"
+    probes = [v for i in range(60) for v in (0.01 * i, 0, 1)]
+    process = subprocess.Popen(
+        [os.path.join(ROOT, "lfprobe"), "bake", "--scan", str(scan), "--probe", *map(str, probes),
+         "--res", "512", "--out", str(out), "--no-cache", "--quiet"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    deadline = time.time() + 120
+    while not (out / "probe_00002.exr").exists() and time.time() < deadline:
+        time.sleep(0.01)
+    process.send_signal(signal.SIGKILL)
+    process.wait()
+    assert not (out / "manifest.json").exists()
+    complete = sorted(out.glob("probe_?????.exr"))
+    assert complete, "the bake should have written some probes before the kill"
+    for path in complete:
+        assert native.read_probe(str(path))["resolution"] == 512
+    run_cli("bake", "--scan", scan, "--probe", 0, 0, 1, "--res", 16, "--out", out, "--no-cache",
+            "--quiet", check=True)
+    assert not list(out.glob("*.tmp.*"))

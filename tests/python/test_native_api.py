@@ -1,0 +1,136 @@
+"""The Python face of the native core: arrays in and out, errors as exceptions, long work with
+the GIL released, progress and cancellation."""
+
+import threading
+import time
+
+import numpy as np
+import pytest
+
+
+def box_cloud(native, spacing=0.05):
+    """Points on the walls of a 4 × 3 × 2.5 m box, scanner at its centre."""
+    lo, hi = np.array([-2.0, -1.5, 0.0]), np.array([2.0, 1.5, 2.5])
+    chunks = []
+    for axis in range(3):
+        u, v = (axis + 1) % 3, (axis + 2) % 3
+        gu = np.arange(lo[u], hi[u], spacing)
+        gv = np.arange(lo[v], hi[v], spacing)
+        uu, vv = np.meshgrid(gu, gv, indexing="ij")
+        for w in (lo[axis], hi[axis]):
+            p = np.zeros((uu.size, 3))
+            p[:, axis] = w
+            p[:, u] = uu.ravel()
+            p[:, v] = vv.ravel()
+            chunks.append(p)
+    positions = np.concatenate(chunks).astype(np.float32)
+    colors = np.tile(np.array([[0.2, 0.4, 0.6]], np.float32), (len(positions), 1))
+    return native.PointCloud.from_arrays(positions, colors, scanners=[[0.0, 0.0, 1.25]])
+
+
+def test_oct_encode_decode_round_trip_and_errors(native):
+    rng = np.random.default_rng(0)
+    d = rng.normal(size=(1000, 3)).astype(np.float32)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    back = native.oct_decode(native.oct_encode(d))
+    assert np.max(np.abs(back - d)) < 1e-5
+    with pytest.raises(ValueError, match="finite non-zero direction"):
+        native.oct_encode(np.array([[np.nan, 0, 1]], np.float32))
+    with pytest.raises(ValueError):
+        native.oct_encode(np.zeros((1, 3), np.float32))
+    with pytest.raises(ValueError, match=r"shape \(n, 3\)"):
+        native.oct_encode(np.zeros((4, 2), np.float32))
+
+
+def test_point_cloud_arrays_are_views_of_the_native_cloud(native):
+    cloud = box_cloud(native, 0.25)
+    positions = cloud.positions
+    assert positions.dtype == np.float32 and positions.shape == (len(cloud), 3)
+    assert cloud.colors.shape == (len(cloud), 3)
+    assert cloud.normals is None and cloud.intensities is None
+    assert cloud.scans[0]["scanner"] == (0.0, 0.0, 1.25)
+    del cloud  # the arrays keep the cloud alive
+    assert np.isfinite(positions).all()
+    with pytest.raises(ValueError, match="NaN"):
+        native.PointCloud.from_arrays(np.array([[0, 0, np.inf]], np.float32))
+
+
+def test_bake_releases_the_gil_reports_progress_and_reads_back(native, tmp_path):
+    cloud = box_cloud(native)
+    ticks = []
+    stop = threading.Event()
+
+    def python_keeps_running():
+        while not stop.is_set():
+            ticks.append(time.perf_counter())
+            time.sleep(0.005)
+
+    seen = []
+    worker = threading.Thread(target=python_keeps_running)
+    worker.start()
+    try:
+        summary = native.bake_probe_set(
+            cloud, str(tmp_path / "set"), resolution=256,
+            positions=[[0, 0, 1.25], [1, 0.5, 1.0], [-1, -0.5, 2.0], [0.5, 0.5, 0.5]],
+            progress=lambda fraction, stage: seen.append((fraction, stage)),
+        )
+    finally:
+        stop.set()
+        worker.join()
+    assert summary["probe_count"] == 4
+    assert len(ticks) > 10, "a Python thread must run while the native bake works"
+    stages = {s for _, s in seen}
+    assert "done" in stages and any(s.startswith("splatting") for s in stages)
+    probe = native.read_probe(str(tmp_path / "set" / "probe_00000.exr"))
+    assert probe["distance"].shape == (256, 256)
+    assert probe["coverage"]["surface"] + probe["coverage"]["inferred"] > 0.99
+    # Straight up from the box's centre the ceiling is 1.25 m away.
+    u, v = native.oct_encode(np.array([[0, 0, 1]], np.float32))[0]
+    assert probe["distance"][int(v * 256), int(u * 256)] == pytest.approx(1.25, abs=0.01)
+    levels = native.coarse_min_distance(probe["distance"])
+    assert levels[0].shape == (128, 128)
+    d = np.nan_to_num(probe["distance"], nan=0.0)
+    assert (levels[0] <= d.reshape(128, 2, 128, 2).min(axis=(1, 3))).all()
+
+
+def test_cancel_from_the_progress_callback(native, tmp_path):
+    cloud = box_cloud(native)
+    with pytest.raises(native.Cancelled):
+        native.bake_probe_set(cloud, str(tmp_path / "set"), resolution=128,
+                              positions=[[0, 0, 1]] * 50, progress=lambda f, s: False)
+    assert not (tmp_path / "set" / "manifest.json").exists()
+
+
+def test_job_runs_in_the_background_and_can_be_cancelled(native, tmp_path):
+    cloud = box_cloud(native)
+    job = native.start_bake_probe_set(cloud, str(tmp_path / "set"), resolution=128,
+                                      positions=[[0, 0, 1]] * 200)
+    assert not job.done
+    job.cancel()
+    assert job.wait(30.0)
+    with pytest.raises(native.Cancelled):
+        job.result()
+
+
+def test_callback_exception_stops_the_work_and_propagates(native, tmp_path):
+    cloud = box_cloud(native)
+
+    def boom(fraction, stage):
+        raise RuntimeError("stop here")
+
+    with pytest.raises(RuntimeError, match="stop here"):
+        native.bake_probe_set(cloud, str(tmp_path / "set"), resolution=64,
+                              positions=[[0, 0, 1]] * 50, progress=boom)
+
+
+def test_bad_bake_arguments_are_value_errors(native, tmp_path):
+    cloud = box_cloud(native, 0.5)
+    with pytest.raises(ValueError, match="resolution"):
+        native.bake_probe_set(cloud, str(tmp_path / "a"), resolution=1, positions=[[0, 0, 1]])
+    with pytest.raises(ValueError, match="no probe positions"):
+        native.bake_probe_set(cloud, str(tmp_path / "b"), resolution=16)
+    with pytest.raises(ValueError, match="grid"):
+        native.bake_probe_set(cloud, str(tmp_path / "c"), resolution=16, grid_min=[0, 0, 0])
+    with pytest.raises(ValueError, match="counts"):
+        native.bake_probe_set(cloud, str(tmp_path / "d"), resolution=16, grid_min=[0, 0, 0],
+                              grid_max=[1, 1, 1], counts=[0, 1, 1])

@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Installs what lfprobe needs on Debian 12 (only what is missing) and builds the native core:
+# the library, the Python module addon/lfprobe/_native*.so and the GoogleTest suite.
+# Environment: LFPROBE_BUILD_DIR (default build/), LFPROBE_WERROR=1 for -Werror.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+
+packages=(
+  cmake ninja-build g++ python3-dev python3-numpy python3-pytest
+  pybind11-dev libembree-dev libopenexr-dev libglm-dev libtbb-dev
+  nlohmann-json3-dev libnanoflann-dev libfast-float-dev libgtest-dev
+)
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  echo "lfprobe setup: installing ${missing[*]}"
+  sudo=""
+  [ "$(id -u)" -eq 0 ] || sudo="sudo"
+  $sudo apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+build="${LFPROBE_BUILD_DIR:-$root/build}"
+werror=OFF
+[ "${LFPROBE_WERROR:-0}" = "1" ] && werror=ON
+cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
+  -DPython_EXECUTABLE=/usr/bin/python3 -DLFPROBE_WERROR="$werror" >/dev/null
+cmake --build "$build" -j"$(nproc)"

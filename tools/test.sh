@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Every test: installs and builds what is missing (tools/setup.sh, with -Werror), runs the
+# GoogleTest suite, builds and runs it again under AddressSanitizer + UndefinedBehaviorSanitizer,
+# then the pytest suite of the bpy-free Python.
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cd "$root"
+export LFPROBE_SHARED_DATA="${LFPROBE_SHARED_DATA:-$root/../shared/data}"
+
+echo "== build (Release, -Werror) =="
+LFPROBE_WERROR=1 bash tools/setup.sh
+
+echo "== native tests =="
+(cd build && ctest --output-on-failure -j"$(nproc)")
+
+echo "== native tests under AddressSanitizer + UndefinedBehaviorSanitizer =="
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLFPROBE_SANITIZE=ON \
+  -DLFPROBE_PYTHON=OFF -DLFPROBE_WERROR=ON >/dev/null
+cmake --build build-asan -j"$(nproc)" --target lfprobe_tests
+ASAN_OPTIONS="detect_leaks=1:abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
+  ./build-asan/lfprobe_tests --gtest_brief=1
+
+echo "== Python tests (no Blender) =="
+PYTHONPATH="$root/addon" /usr/bin/python3 -m pytest -q tests/python
