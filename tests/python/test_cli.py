@@ -43,19 +43,24 @@ def test_pump_room_scan_at_its_scanner_covers_every_swept_direction(native, shar
     probe = native.read_probe(str(tmp_path / "p" / "probe_00000.exr"))
     p = cloud.positions.astype(np.float64)
     elevation = np.arcsin(p[:, 2] / np.linalg.norm(p, axis=1))
-    # The texels whose direction lies inside the swept band of elevations, a texel in from its
-    # edges (about 1.4 texels of angle at this resolution), count.
+    azimuth = np.arctan2(p[:, 1], p[:, 0])  # this scan's window does not straddle ±180°
+    # The texels whose direction lies inside the swept window of azimuths and elevations, two
+    # texel sizes in from its edges, count.
     centres = (np.stack(np.meshgrid(np.arange(res), np.arange(res), indexing="xy"), -1) + 0.5) / res
-    dirs = native.oct_decode(centres.reshape(-1, 2).astype(np.float32))
+    dirs = native.oct_decode(centres.reshape(-1, 2).astype(np.float32)).astype(np.float64)
     texel_elevation = np.arcsin(np.clip(dirs[:, 2], -1, 1))
-    margin = 2.0 * np.pi / (2 * res) * 2
-    swept = (texel_elevation > elevation.min() + margin) & (texel_elevation < elevation.max() - margin)
+    texel_azimuth = np.arctan2(dirs[:, 1], dirs[:, 0])
+    margin = 2 * np.sqrt(4 * np.pi / res**2)
+    swept = (
+        (texel_elevation > elevation.min() + margin) & (texel_elevation < elevation.max() - margin)
+        & (texel_azimuth > azimuth.min() + margin) & (texel_azimuth < azimuth.max() - margin)
+    )
     state = probe["state"].reshape(-1)
     covered = np.isin(state, [2, 3])  # SURFACE, INFERRED
     coverage = covered[swept].mean()
-    print(f"pump room at its scanner, {res}²: swept elevations "
-          f"{np.degrees(elevation.min()):.1f}° to {np.degrees(elevation.max()):.1f}°, "
-          f"{swept.sum()} texels, coverage {100 * coverage:.3f}%")
+    print(f"pump room at its scanner, {res}²: swept azimuths {np.degrees(azimuth.min()):.1f}° to "
+          f"{np.degrees(azimuth.max()):.1f}°, elevations {np.degrees(elevation.min()):.1f}° to "
+          f"{np.degrees(elevation.max()):.1f}°: {swept.sum()} texels, coverage {100 * coverage:.3f}%")
     assert coverage > 0.999
 
 
