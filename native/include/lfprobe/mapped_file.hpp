@@ -1,0 +1,36 @@
+// A read-only memory mapping of a whole file, so that parsers can hand byte ranges of it to
+// worker threads without copying.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+namespace lfprobe {
+
+class MappedFile {
+public:
+    // Maps `path` read-only. An empty file maps to an empty view. Throws IoError naming the
+    // path and the system's reason when the file cannot be opened or mapped.
+    explicit MappedFile(const std::string& path);
+    ~MappedFile();
+
+    MappedFile(const MappedFile&) = delete;
+    MappedFile& operator=(const MappedFile&) = delete;
+    MappedFile(MappedFile&& other) noexcept;
+    MappedFile& operator=(MappedFile&& other) noexcept;
+
+    [[nodiscard]] const char* data() const { return data_; }
+    [[nodiscard]] std::size_t size() const { return size_; }
+    [[nodiscard]] std::string_view view() const { return {data_, size_}; }
+    [[nodiscard]] const std::string& path() const { return path_; }
+
+private:
+    void unmap() noexcept;
+
+    std::string path_;
+    const char* data_ = nullptr;
+    std::size_t size_ = 0;
+};
+
+} // namespace lfprobe

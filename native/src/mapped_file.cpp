@@ -1,0 +1,95 @@
+// Read-only mmap of a file, released on destruction.
+#include "lfprobe/mapped_file.hpp"
+
+#include <cerrno>
+#include <cstring>
+#include <utility>
+
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include "lfprobe/error.hpp"
+
+namespace lfprobe {
+
+namespace {
+
+[[noreturn]] void throw_system_error(const std::string& path, const char* action, int error) {
+    throw IoError(path + ": cannot " + action + " (" + std::strerror(error) + ")");
+}
+
+// Closes the descriptor on every path out of the constructor; the mapping outlives it.
+class FileDescriptor {
+public:
+    explicit FileDescriptor(int fd) : fd_(fd) {}
+    ~FileDescriptor() {
+        if (fd_ >= 0) {
+            ::close(fd_);
+        }
+    }
+    FileDescriptor(const FileDescriptor&) = delete;
+    FileDescriptor& operator=(const FileDescriptor&) = delete;
+    [[nodiscard]] int get() const { return fd_; }
+
+private:
+    int fd_;
+};
+
+} // namespace
+
+MappedFile::MappedFile(const std::string& path) : path_(path) {
+    const FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+    if (fd.get() < 0) {
+        throw_system_error(path, "open", errno);
+    }
+    struct stat info {};
+    if (::fstat(fd.get(), &info) != 0) {
+        throw_system_error(path, "stat", errno);
+    }
+    if (!S_ISREG(info.st_mode)) {
+        throw IoError(path + ": cannot open (not a regular file)");
+    }
+    size_ = static_cast<std::size_t>(info.st_size);
+    if (size_ == 0) {
+        return; // mmap refuses zero lengths; an empty view is all there is
+    }
+    void* mapping = ::mmap(nullptr, size_, PROT_READ, MAP_PRIVATE, fd.get(), 0);
+    if (mapping == MAP_FAILED) {
+        const int error = errno;
+        size_ = 0;
+        throw_system_error(path, "map", error);
+    }
+    // Parsers read front to back within each chunk; ask the kernel to read ahead.
+    ::madvise(mapping, size_, MADV_WILLNEED);
+    data_ = static_cast<const char*>(mapping);
+}
+
+MappedFile::~MappedFile() {
+    unmap();
+}
+
+MappedFile::MappedFile(MappedFile&& other) noexcept
+    : path_(std::move(other.path_)), data_(std::exchange(other.data_, nullptr)),
+      size_(std::exchange(other.size_, 0)) {}
+
+MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
+    if (this != &other) {
+        unmap();
+        path_ = std::move(other.path_);
+        data_ = std::exchange(other.data_, nullptr);
+        size_ = std::exchange(other.size_, 0);
+    }
+    return *this;
+}
+
+void MappedFile::unmap() noexcept {
+    if (data_ != nullptr) {
+        ::munmap(const_cast<char*>(data_), size_);
+        data_ = nullptr;
+        size_ = 0;
+    }
+}
+
+} // namespace lfprobe

@@ -1,0 +1,311 @@
+// Pieces shared by the scan readers (text and PLY): column names, number parsing, chunking a
+// mapped file at line boundaries, lazy line numbers and colour decoding.
+#pragma once
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <system_error>
+#include <thread>
+#include <vector>
+
+#include <fast_float/fast_float.h>
+#include <glm/vec3.hpp>
+
+#include "lfprobe/color.hpp"
+
+namespace lfprobe::detail {
+
+// What a column (text) or vertex property (PLY) holds.
+enum class Channel : std::uint8_t {
+    Ignore,
+    X,
+    Y,
+    Z,
+    Intensity,
+    Red,
+    Green,
+    Blue,
+    NormalX,
+    NormalY,
+    NormalZ
+};
+inline constexpr std::size_t channel_count = 11;
+
+[[nodiscard]] inline char ascii_lower(char c) {
+    return c >= 'A' && c <= 'Z' ? static_cast<char>(c - 'A' + 'a') : c;
+}
+
+[[nodiscard]] inline bool equals_ignoring_case(std::string_view a, std::string_view b) {
+    return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
+               return ascii_lower(x) == ascii_lower(y);
+           });
+}
+
+// The channel a column header or PLY property name stands for, case-insensitive; nullopt
+// for names no reader knows.
+[[nodiscard]] inline std::optional<Channel> channel_from_name(std::string_view name) {
+    struct Alias {
+        std::string_view name;
+        Channel channel;
+    };
+    static constexpr auto aliases = std::to_array<Alias>({
+        {"x", Channel::X},
+        {"y", Channel::Y},
+        {"z", Channel::Z},
+        {"i", Channel::Intensity},
+        {"intensity", Channel::Intensity},
+        {"reflectance", Channel::Intensity},
+        {"scalar_intensity", Channel::Intensity},
+        {"r", Channel::Red},
+        {"g", Channel::Green},
+        {"b", Channel::Blue},
+        {"red", Channel::Red},
+        {"green", Channel::Green},
+        {"blue", Channel::Blue},
+        {"diffuse_red", Channel::Red},
+        {"diffuse_green", Channel::Green},
+        {"diffuse_blue", Channel::Blue},
+        // CloudCompare names float colours Rf Gf Bf.
+        {"rf", Channel::Red},
+        {"gf", Channel::Green},
+        {"bf", Channel::Blue},
+        {"nx", Channel::NormalX},
+        {"ny", Channel::NormalY},
+        {"nz", Channel::NormalZ},
+        {"normal_x", Channel::NormalX},
+        {"normal_y", Channel::NormalY},
+        {"normal_z", Channel::NormalZ},
+        {"normalx", Channel::NormalX},
+        {"normaly", Channel::NormalY},
+        {"normalz", Channel::NormalZ},
+        {"_", Channel::Ignore},
+        {"scalar_reflectance", Channel::Intensity},
+        {"intensities", Channel::Intensity},
+        {"remission", Channel::Intensity},
+    });
+    for (const Alias& alias : aliases) {
+        if (equals_ignoring_case(alias.name, name)) {
+            return alias.channel;
+        }
+    }
+    return std::nullopt;
+}
+
+[[nodiscard]] inline const char* channel_name(Channel channel) {
+    switch (channel) {
+    case Channel::X:
+        return "x";
+    case Channel::Y:
+        return "y";
+    case Channel::Z:
+        return "z";
+    case Channel::Intensity:
+        return "intensity";
+    case Channel::Red:
+        return "red";
+    case Channel::Green:
+        return "green";
+    case Channel::Blue:
+        return "blue";
+    case Channel::NormalX:
+        return "nx";
+    case Channel::NormalY:
+        return "ny";
+    case Channel::NormalZ:
+        return "nz";
+    case Channel::Ignore:
+        break;
+    }
+    return "ignored";
+}
+
+// Where each channel sits among the columns (or properties), -1 when absent.
+struct ChannelLayout {
+    std::array<int, channel_count> index_of{};
+    bool has_colour = false;
+    bool has_normal = false;
+    bool has_intensity = false;
+
+    [[nodiscard]] int index(Channel channel) const {
+        return index_of[static_cast<std::size_t>(channel)];
+    }
+};
+
+// Builds the layout of `channels`; returns an explanation instead when a channel appears
+// twice, x/y/z is missing, or colours/normals are incomplete.
+[[nodiscard]] inline std::string make_channel_layout(const std::vector<Channel>& channels,
+                                                     ChannelLayout& layout) {
+    layout = ChannelLayout{};
+    layout.index_of.fill(-1);
+    for (std::size_t column = 0; column < channels.size(); ++column) {
+        const Channel channel = channels[column];
+        if (channel == Channel::Ignore) {
+            continue;
+        }
+        int& slot = layout.index_of[static_cast<std::size_t>(channel)];
+        if (slot >= 0) {
+            return std::string("'") + channel_name(channel) + "' appears twice";
+        }
+        slot = static_cast<int>(column);
+    }
+    for (Channel channel : {Channel::X, Channel::Y, Channel::Z}) {
+        if (layout.index(channel) < 0) {
+            return std::string("no '") + channel_name(channel) + "' column";
+        }
+    }
+    const int colours = (layout.index(Channel::Red) >= 0) + (layout.index(Channel::Green) >= 0) +
+                        (layout.index(Channel::Blue) >= 0);
+    if (colours != 0 && colours != 3) {
+        return "colour needs all three of red, green and blue";
+    }
+    const int normals = (layout.index(Channel::NormalX) >= 0) +
+                        (layout.index(Channel::NormalY) >= 0) +
+                        (layout.index(Channel::NormalZ) >= 0);
+    if (normals != 0 && normals != 3) {
+        return "normals need all three of nx, ny and nz";
+    }
+    layout.has_colour = colours == 3;
+    layout.has_normal = normals == 3;
+    layout.has_intensity = layout.index(Channel::Intensity) >= 0;
+    return {};
+}
+
+// Column separators of the text formats: any run of spaces, tabs and commas; a CR before the
+// LF is treated as one more separator so that CRLF files need no special path.
+[[nodiscard]] inline bool is_separator(char c) {
+    return c == ' ' || c == '\t' || c == ',' || c == '\r';
+}
+
+// Parses a double at [first, last). fast_float rejects a leading '+', which some exporters
+// write, so it is skipped here. Returns the end of the number, or nullptr when there is none.
+// Overflowing values come back as infinities: callers check finiteness.
+[[nodiscard]] inline const char* parse_double(const char* first, const char* last, double& value) {
+    const char* start = first;
+    if (start < last && *start == '+' && start + 1 < last && *(start + 1) != '-' &&
+        *(start + 1) != '+') {
+        ++start;
+    }
+    const fast_float::from_chars_result result = fast_float::from_chars(start, last, value);
+    if (result.ec == std::errc::invalid_argument || result.ptr == start) {
+        return nullptr;
+    }
+    if (result.ec == std::errc::result_out_of_range && !std::isfinite(value)) {
+        value = HUGE_VAL;
+    }
+    return result.ptr;
+}
+
+// 1-based number of the line holding byte `offset`; only called on the error path.
+[[nodiscard]] inline std::uint64_t line_number_at(const char* data, std::size_t offset) {
+    return 1 + static_cast<std::uint64_t>(std::count(data, data + offset, '\n'));
+}
+
+// Bytes quoted in a message, with anything unprintable (binary junk) shown as '?'.
+[[nodiscard]] inline std::string printable(std::string_view text) {
+    std::string out(text);
+    for (char& c : out) {
+        if (c < ' ' || c > '~') {
+            c = '?';
+        }
+    }
+    return out;
+}
+
+// The whitespace- or separator-delimited token starting at `first`, for quoting in errors.
+[[nodiscard]] inline std::string token_at(const char* first, const char* last) {
+    const char* end = first;
+    while (end < last && *end != '\n' && !is_separator(*end) && end - first < 64) {
+        ++end;
+    }
+    return printable(std::string_view(first, static_cast<std::size_t>(end - first)));
+}
+
+// Bytes per parallel work item: small enough to spread a few MB over every core, large
+// enough (at most 4 MB) that scheduling costs nothing next to parsing.
+[[nodiscard]] inline std::size_t parse_chunk_bytes(std::size_t total_bytes) {
+    const std::size_t threads = std::max(1u, std::thread::hardware_concurrency());
+    const std::size_t per_core = total_bytes / (4 * threads);
+    return std::clamp<std::size_t>(per_core, std::size_t{256} << 10, std::size_t{4} << 20);
+}
+
+struct ByteRange {
+    std::size_t begin = 0;
+    std::size_t end = 0;
+};
+
+// Splits [begin, end) into ranges of about `chunk_bytes` that start at line starts.
+[[nodiscard]] inline std::vector<ByteRange>
+split_at_lines(const char* data, std::size_t begin, std::size_t end, std::size_t chunk_bytes) {
+    std::vector<ByteRange> ranges;
+    std::size_t start = begin;
+    while (start < end) {
+        std::size_t stop = end;
+        if (end - start > chunk_bytes) {
+            const char* cut = data + start + chunk_bytes;
+            const void* newline = std::memchr(cut, '\n', end - (start + chunk_bytes));
+            stop = newline == nullptr
+                       ? end
+                       : static_cast<std::size_t>(static_cast<const char*>(newline) - data) + 1;
+        }
+        ranges.push_back({start, stop});
+        start = stop;
+    }
+    return ranges;
+}
+
+// A problem found by a worker: kept, not thrown, so that the earliest one in the file is
+// reported whatever the thread timing.
+struct ParseFailure {
+    bool failed = false;
+    std::size_t byte_offset = 0;
+    std::string message;
+
+    void set(std::size_t offset, std::string what) {
+        if (!failed || offset < byte_offset) {
+            failed = true;
+            byte_offset = offset;
+            message = std::move(what);
+        }
+    }
+};
+
+// Decodes colours stored as raw sRGB values in place. Files write 0-255 integers or 0-1
+// floats; which one is told by the largest value in the file (`max_value`).
+inline void decode_srgb_in_place(glm::vec3* colours, std::size_t count, double max_value) {
+    if (max_value <= 1.0) {
+        for (std::size_t i = 0; i < count; ++i) {
+            for (int c = 0; c < 3; ++c) {
+                colours[i][c] = srgb_to_linear(colours[i][c]);
+            }
+        }
+        return;
+    }
+    const std::array<float, 256>& table = srgb8_to_linear_table();
+    for (std::size_t i = 0; i < count; ++i) {
+        for (int c = 0; c < 3; ++c) {
+            const float value = colours[i][c];
+            const auto whole = static_cast<std::size_t>(value);
+            colours[i][c] =
+                static_cast<float>(whole) == value ? table[whole] : srgb_to_linear(value / 255.0f);
+        }
+    }
+}
+
+// A unit normal, or zero when the file says zero (no normal known for that point).
+[[nodiscard]] inline glm::vec3 unit_normal(double x, double y, double z) {
+    const double length = std::sqrt(x * x + y * y + z * z);
+    if (!(length > 0.0)) {
+        return glm::vec3(0.0f);
+    }
+    return glm::vec3(static_cast<float>(x / length), static_cast<float>(y / length),
+                     static_cast<float>(z / length));
+}
+
+} // namespace lfprobe::detail
