@@ -3,11 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
+#include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <nanoflann.hpp>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include "lfprobe/error.hpp"
 
@@ -33,7 +36,45 @@ using KdTree =
 
 constexpr std::size_t kChunk = 16384;
 
+// Spreads the low 21 bits of v so that two zero bits follow each one.
+std::uint64_t spread_bits(std::uint64_t v) {
+    v &= 0x1fffff;
+    v = (v | v << 32) & 0x1f00000000ffffull;
+    v = (v | v << 16) & 0x1f0000ff0000ffull;
+    v = (v | v << 8) & 0x100f00f00f00f00full;
+    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
+    v = (v | v << 2) & 0x1249249249249249ull;
+    return v;
+}
+
 } // namespace
+
+std::vector<std::uint32_t> morton_order(const std::vector<glm::vec3>& positions) {
+    const std::size_t n = positions.size();
+    glm::vec3 lo(std::numeric_limits<float>::max());
+    glm::vec3 hi(std::numeric_limits<float>::lowest());
+    for (const glm::vec3& p : positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    const glm::vec3 extent = glm::max(hi - lo, glm::vec3(1e-30f));
+    const float cells = static_cast<float>((1u << 21) - 1);
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+        const glm::vec3 q = (positions[i] - lo) / extent * cells;
+        const auto cell = [&](int a) {
+            return static_cast<std::uint64_t>(std::clamp(q[a], 0.0f, cells));
+        };
+        keyed[i] = {spread_bits(cell(0)) | spread_bits(cell(1)) << 1 | spread_bits(cell(2)) << 2,
+                    static_cast<std::uint32_t>(i)};
+    });
+    tbb::parallel_sort(keyed.begin(), keyed.end());
+    std::vector<std::uint32_t> order(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        order[i] = keyed[i].second;
+    }
+    return order;
+}
 
 glm::vec3 smallest_eigenvector(const double covariance[3][3]) {
     double a[3][3];
@@ -109,7 +150,13 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
     if (progress != nullptr) {
         progress->begin_stage("indexing points", 1);
     }
-    const PositionsAdaptor adaptor{cloud.positions};
+    // The tree is built over a Morton-sorted copy, and queried in that order, so that a query
+    // and its neighbours sit close together in memory.
+    result.spatial_order = morton_order(cloud.positions);
+    std::vector<glm::vec3> sorted(n);
+    tbb::parallel_for(std::size_t{0}, n,
+                      [&](std::size_t j) { sorted[j] = cloud.positions[result.spatial_order[j]]; });
+    const PositionsAdaptor adaptor{sorted};
     const KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
     if (progress != nullptr) {
         progress->begin_stage("estimating normals and spacing", n);
@@ -126,15 +173,16 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
         std::vector<std::uint32_t> idx(k);
         std::vector<float> d2(k);
         const std::size_t end = std::min(n, (chunk + 1) * kChunk);
-        for (std::size_t i = chunk * kChunk; i < end; ++i) {
-            const glm::vec3 p = cloud.positions[i];
+        for (std::size_t j = chunk * kChunk; j < end; ++j) {
+            const std::size_t i = result.spatial_order[j];
+            const glm::vec3 p = sorted[j];
             const std::size_t found = tree.knnSearch(&p.x, k, idx.data(), d2.data());
             // Spacing: mean distance to the nearest distinct neighbours (duplicates skipped).
             double spacing_sum = 0.0;
             int spacing_count = 0;
-            for (std::size_t j = 0; j < found && spacing_count < options.spacing_neighbours; ++j) {
-                if (d2[j] > 0.0f) {
-                    spacing_sum += std::sqrt(static_cast<double>(d2[j]));
+            for (std::size_t q = 0; q < found && spacing_count < options.spacing_neighbours; ++q) {
+                if (d2[q] > 0.0f) {
+                    spacing_sum += std::sqrt(static_cast<double>(d2[q]));
                     ++spacing_count;
                 }
             }
@@ -149,16 +197,16 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
                 const std::size_t m =
                     std::min(found, static_cast<std::size_t>(options.normal_neighbours) + 1);
                 glm::dvec3 mean(0.0);
-                for (std::size_t j = 0; j < m; ++j) {
-                    mean += glm::dvec3(cloud.positions[idx[j]]);
+                for (std::size_t q = 0; q < m; ++q) {
+                    mean += glm::dvec3(sorted[idx[q]]);
                 }
                 mean /= static_cast<double>(m);
                 double cov[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
-                for (std::size_t j = 0; j < m; ++j) {
-                    const glm::dvec3 q = glm::dvec3(cloud.positions[idx[j]]) - mean;
+                for (std::size_t q = 0; q < m; ++q) {
+                    const glm::dvec3 e = glm::dvec3(sorted[idx[q]]) - mean;
                     for (int r = 0; r < 3; ++r) {
                         for (int c = 0; c < 3; ++c) {
-                            cov[r][c] += q[r] * q[c];
+                            cov[r][c] += e[r] * e[c];
                         }
                     }
                 }

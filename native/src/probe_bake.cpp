@@ -155,6 +155,9 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
             }
         }
     };
+    // Neighbouring points write neighbouring texels: visiting them in spatial order keeps the
+    // texel buffers in cache.
+    const bool spatial = geometry.spatial_order.size() == count;
     auto over_points = [&](const char* stage, auto&& per_point) {
         if (progress != nullptr) {
             progress->begin_stage(stage, count);
@@ -165,8 +168,8 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
                                   progress->throw_if_cancelled();
                               }
                               const std::size_t end = std::min(count, (chunk + 1) * kPointChunk);
-                              for (std::size_t i = chunk * kPointChunk; i < end; ++i) {
-                                  per_point(i);
+                              for (std::size_t j = chunk * kPointChunk; j < end; ++j) {
+                                  per_point(spatial ? std::size_t{geometry.spatial_order[j]} : j);
                               }
                               if (progress != nullptr) {
                                   progress->advance(end - chunk * kPointChunk);

@@ -25,7 +25,13 @@ struct LocalGeometry {
     // file gave normals); false means the sign is arbitrary and a baker orients it toward
     // its probe.
     std::vector<std::uint8_t> oriented;
+    // The points' indices in Morton (Z-curve) order of their positions: visiting points in this
+    // order keeps neighbour searches and splat writes in cache, whatever order the file had.
+    std::vector<std::uint32_t> spatial_order;
 };
+
+// Indices of `positions` sorted along a Morton curve over their bounding box.
+[[nodiscard]] std::vector<std::uint32_t> morton_order(const std::vector<glm::vec3>& positions);
 
 [[nodiscard]] LocalGeometry estimate_local_geometry(const PointCloud& cloud,
                                                     const LocalGeometryOptions& options,
