@@ -56,7 +56,7 @@ def test_point_cloud_arrays_are_views_of_the_native_cloud(native):
 
 
 def test_bake_releases_the_gil_reports_progress_and_reads_back(native, tmp_path):
-    cloud = box_cloud(native)
+    cloud = box_cloud(native, 0.02)  # enough work (~1 s) for several progress polls
     ticks = []
     stop = threading.Event()
 
