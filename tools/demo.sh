@@ -8,11 +8,11 @@ data="${LFPROBE_SHARED_DATA:-$root/../shared/data}"
 out="$root/out/demo"
 bash tools/setup.sh
 mkdir -p "$out"
-echo "== bake: pump-room scan (155,201 points), probes at the scanner and on a 3×3×1 grid =="
+echo "== bake: pump-room scan (155,201 points), a probe at the scanner and a 3×3×2 grid in the room =="
 ./lfprobe bake --scan "$data/scans/pumpA_xyzrgb.xyz" --scanner 0 0 0 \
   --probe 0 0 0 --res 1024 --out "$out/pump_at_scanner" --cache "$out/cache"
 ./lfprobe bake --scan "$data/scans/pumpA_xyzrgb.xyz" --scanner 0 0 0 \
-  --grid-min -1 -1 -0.5 --grid-max 1 1 -0.5 --counts 3 3 1 --res 512 \
+  --grid-min -2 -4 -0.5 --grid-max 0.5 -1.5 0.5 --counts 3 3 2 --res 512 \
   --out "$out/pump_grid" --cache "$out/cache"
 echo "== what the probe sets hold =="
 ./lfprobe info "$out/pump_at_scanner"

@@ -9,7 +9,7 @@ import time
 class TerminalProgress:
     """A callback for native jobs: ``job.run(TerminalProgress())``."""
 
-    def __init__(self, stream=None, min_interval: float = 1.0):
+    def __init__(self, stream=None, min_interval: float = 5.0):
         self.stream = stream or sys.stderr
         self.interactive = hasattr(self.stream, "isatty") and self.stream.isatty()
         self.min_interval = min_interval
@@ -27,7 +27,9 @@ class TerminalProgress:
             if self.interactive and self._stage is not None:
                 self.stream.write("\n")
             self._stage = stage
-            self._last = 0.0
+            if self.interactive:
+                self._last = 0.0
+        # On a terminal the line updates in place; in a log, a line every min_interval seconds.
         if now - self._last >= (0.1 if self.interactive else self.min_interval):
             self._last = now
             line = f"  {stage}: {100.0 * fraction:5.1f}%"
