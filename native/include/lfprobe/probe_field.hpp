@@ -1,0 +1,106 @@
+// A loaded probe set ready for tracing (DESIGN.md §4 "Many probes"): every probe's maps and
+// its coarse min-distance levels, and the two ways of asking several probes about one ray.
+//
+// Nearest: the probes nearest the ray's origin are tried in order of distance (up to
+// max_probes); a HIT or a MISS answers, an UNKNOWN passes the ray on to the next probe, which
+// starts where the previous ones proved the ray free. Grid: the ray walks the grid's cells
+// (3D DDA, any counts, clamped at the faces, never wrapped) and in each cell tries its corner
+// probes nearest first from where the ray enters the cell; a ray that misses the grid's box is
+// traced nearest-first. Probe traces always start at the distance already proven free, never
+// at the grid's box, so surfaces between a camera outside the grid and the grid are seen.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "lfprobe/min_distance_pyramid.hpp"
+#include "lfprobe/probe_map.hpp"
+#include "lfprobe/probe_placement.hpp"
+#include "lfprobe/probe_set.hpp"
+#include "lfprobe/probe_trace.hpp"
+#include "lfprobe/progress.hpp"
+#include "lfprobe/ray.hpp"
+
+namespace lfprobe {
+
+enum class FieldMode {
+    Auto,    // Grid when the set is laid out as a grid, Nearest otherwise
+    Nearest, // nearest probes to the ray origin first
+    Grid,    // walk the grid's cells; only for sets laid out as a grid
+};
+
+// "auto", "nearest", "grid"; InputError for anything else.
+[[nodiscard]] FieldMode field_mode_from_name(const std::string& name);
+[[nodiscard]] const char* field_mode_name(FieldMode mode);
+
+struct FieldTraceSettings {
+    TraceSettings probe;
+    FieldMode mode = FieldMode::Auto;
+    int max_probes = 8; // Nearest: how many of the nearest probes are tried
+};
+
+struct FieldTraceResult {
+    TraceStatus status = TraceStatus::Unknown;
+    double t = std::numeric_limits<double>::infinity(); // HIT: distance along the ray
+    double free_until = 0.0;  // the ray is proven free on [t_min, free_until]
+    glm::vec3 radiance{0.0f}; // HIT: linear RGB
+    glm::vec3 normal{0.0f};   // HIT: stored surface normal
+    int probe = -1;           // the probe that answered HIT or MISS; -1 when none did
+    oct::Texel texel{-1, -1}; // HIT: the texel of that probe
+    std::uint32_t steps = 0;  // texels visited (coarse and fine) over every probe tried
+    std::uint32_t probes_tried = 0;
+};
+
+class ProbeField {
+public:
+    // Loads the probe set in `folder`: the manifest, every probe and its coarse levels, in
+    // parallel. Progress counts probes; cancellation is honoured between probes.
+    [[nodiscard]] static ProbeField load(const std::string& folder, Progress* progress = nullptr);
+
+    // A field over probes already in memory, in the placement's index order (probe i of a grid
+    // is x + counts[0] * (y + counts[1] * z)). The probes' own positions are where they are
+    // traced from. Throws InputError when counts or spacings do not fit.
+    ProbeField(const ProbePlacement& placement, std::vector<ProbeMap> probes,
+               const glm::dvec3& world_offset = glm::dvec3(0.0));
+
+    [[nodiscard]] const ProbeSetManifest& manifest() const { return manifest_; }
+    [[nodiscard]] const glm::dvec3& world_offset() const { return manifest_.world_offset; }
+    [[nodiscard]] bool is_grid() const { return manifest_.placement.is_grid; }
+    [[nodiscard]] const ProbeGrid& grid() const { return manifest_.placement.grid; }
+    [[nodiscard]] std::size_t probe_count() const { return probes_.size(); }
+    [[nodiscard]] const ProbeMap& probe(std::size_t i) const { return probes_.at(i); }
+    [[nodiscard]] const MinDistancePyramid& levels(std::size_t i) const { return levels_.at(i); }
+    // Maps and coarse levels of every probe.
+    [[nodiscard]] std::size_t memory_bytes() const;
+
+    // The mode `settings` asks for, with Auto resolved. InputError for Grid on a set that is
+    // not a grid.
+    [[nodiscard]] FieldMode resolve_mode(const FieldTraceSettings& settings) const;
+
+    // Traces a ray given in the set's local frame (world minus world_offset).
+    [[nodiscard]] FieldTraceResult trace(const Ray& ray,
+                                         const FieldTraceSettings& settings = {}) const;
+    [[nodiscard]] FieldTraceResult trace_nearest(const Ray& ray,
+                                                 const FieldTraceSettings& settings = {}) const;
+    [[nodiscard]] FieldTraceResult trace_grid(const Ray& ray,
+                                              const FieldTraceSettings& settings = {}) const;
+
+    // One probe on its own (the ray in the local frame).
+    [[nodiscard]] ProbeTraceResult trace_one(std::size_t probe, const Ray& ray,
+                                             const TraceSettings& settings = {}) const;
+
+private:
+    ProbeField() = default;
+    void build_levels(Progress* progress);
+    void check_placement() const;
+
+    ProbeSetManifest manifest_;
+    std::vector<ProbeMap> probes_;
+    std::vector<MinDistancePyramid> levels_;
+};
+
+} // namespace lfprobe

@@ -1,0 +1,83 @@
+// Tracing one ray against one probe (DESIGN.md §4 "Trace one probe").
+//
+// The ray is split at the probe's three axis planes into at most four pieces that each stay in
+// one octant. Inside an octant the octahedral map is a linear-fractional function of the
+// position, u(t) = (a + b t) / (c + e t), so the ray projects to a straight segment walked
+// monotonically, and every texel edge (u or v constant) is a plane through the probe centre:
+// the ray meets it at t = −(n·o)/(n·d). The walk goes texel by texel with those exact crossings;
+// over each texel's t-interval the ray's distance from the probe is known exactly (largest at
+// an end, smallest at an end or at the closest approach t* = −o·d), and is compared with the
+// radial distance the probe stored for that texel. Coarse min-distance levels skip whole
+// blocks of texels the ray passes in front of; the skip never changes the answer.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+
+#include <glm/vec3.hpp>
+
+#include "lfprobe/min_distance_pyramid.hpp"
+#include "lfprobe/octahedral.hpp"
+#include "lfprobe/probe_map.hpp"
+#include "lfprobe/ray.hpp"
+
+namespace lfprobe {
+
+// The answer for one ray; the numeric values are those of the images' "status" channel.
+enum class TraceStatus : std::uint8_t {
+    Miss = 0,    // nothing before t_max: passed in front of every surface or through empty texels
+    Hit = 1,     // met a surface the probe saw, facing the ray
+    Unknown = 2, // passed behind a surface, met a back face, or entered texels without data
+};
+
+[[nodiscard]] const char* trace_status_name(TraceStatus status);
+
+struct TraceSettings {
+    // A ray within this distance (metres) in front of or behind a stored surface still meets
+    // it: the stored distance is a per-texel sample of a continuous surface.
+    double thickness = 0.02;
+    // Plus this many texel footprints at the surface's distance (footprint = distance × the
+    // texel's angular size, sqrt(4π)/N): grazing surfaces change distance across a texel.
+    double thickness_texels = 1.0;
+    // Skip texels with the coarse min-distance levels (false: walk every fine texel; the
+    // answer is the same, only slower; for tests and measurements).
+    bool use_coarse_levels = true;
+    // A ray origin closer than this (metres) to the probe centre is at the probe: its answer is
+    // one texel lookup.
+    double eye_at_probe_distance = 1e-9;
+};
+
+struct ProbeTraceResult {
+    TraceStatus status = TraceStatus::Unknown;
+    // HIT: ray parameter where the ray meets the surface; otherwise +inf.
+    double t = std::numeric_limits<double>::infinity();
+    // The ray is proven free of surfaces on [t_min, free_until]: t on HIT, t_max on MISS, the
+    // entry into the texel that stopped the trace on UNKNOWN. A next probe starts there.
+    double free_until = 0.0;
+    // HIT: the texel met; UNKNOWN: the texel that stopped the trace; MISS: {-1, -1}.
+    oct::Texel texel{-1, -1};
+    glm::vec3 radiance{0.0f};       // HIT: the texel's linear RGB
+    glm::vec3 normal{0.0f};         // HIT: the texel's stored normal
+    std::uint32_t fine_steps = 0;   // fine texels visited
+    std::uint32_t coarse_steps = 0; // coarse cells tested
+
+    [[nodiscard]] std::uint32_t steps() const { return fine_steps + coarse_steps; }
+};
+
+// Traces `ray`, given in the probe's frame (origin relative to the probe centre, unit
+// direction), over [ray.t_min, ray.t_max] against `map`. `levels` are the map's coarse levels
+// (may be null: every fine texel is walked).
+[[nodiscard]] ProbeTraceResult trace_probe(const ProbeMap& map, const MinDistancePyramid* levels,
+                                           const Ray& ray, const TraceSettings& settings = {});
+
+// The answer when the eye is at the probe: one texel lookup in the ray's direction, judged over
+// [t_min, t_max] like any texel (HIT at the stored distance, MISS for empty or beyond t_max,
+// UNKNOWN for unknown, for a back face, or when the surface lies before t_min).
+[[nodiscard]] ProbeTraceResult lookup_probe(const ProbeMap& map, const glm::dvec3& direction,
+                                            double t_min, double t_max,
+                                            const TraceSettings& settings = {});
+
+// The tolerance a stored surface at `distance` gets in a map of resolution n.
+[[nodiscard]] double surface_thickness(const TraceSettings& settings, double distance, int n);
+
+} // namespace lfprobe

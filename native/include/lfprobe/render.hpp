@@ -1,0 +1,70 @@
+// Rendering a view by tracing camera rays against a probe field (DESIGN.md §1, §4): one ray
+// per pixel through the camera of DESIGN.md §3, in tiles on all cores. Every pixel is computed
+// on its own from the same inputs, so the image is bit-identical for any number of threads.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "lfprobe/camera.hpp"
+#include "lfprobe/image_exr.hpp"
+#include "lfprobe/probe_field.hpp"
+#include "lfprobe/progress.hpp"
+
+namespace lfprobe {
+
+struct RenderSettings {
+    FieldTraceSettings trace;
+    int tile_size = 32; // pixels per tile side: the unit of parallel work and of progress
+    // Where in the pixel its ray passes, in pixels from the pixel's top-left corner.
+    double sample_x = 0.5;
+    double sample_y = 0.5;
+};
+
+// Counts that do not depend on the clock (DESIGN.md §6), and the time it took.
+struct RenderStats {
+    std::uint64_t rays = 0;
+    std::uint64_t hits = 0;
+    std::uint64_t misses = 0;
+    std::uint64_t unknown = 0;
+    std::uint64_t steps = 0;        // texels visited over all rays
+    std::uint64_t probes_tried = 0; // probe traces over all rays
+    double seconds = 0.0;           // wall time of the trace (not of loading or writing)
+
+    [[nodiscard]] double rays_per_second() const {
+        return seconds > 0.0 ? static_cast<double>(rays) / seconds : 0.0;
+    }
+    [[nodiscard]] double mean_steps() const {
+        return rays > 0 ? static_cast<double>(steps) / static_cast<double>(rays) : 0.0;
+    }
+    [[nodiscard]] double mean_probes() const {
+        return rays > 0 ? static_cast<double>(probes_tried) / static_cast<double>(rays) : 0.0;
+    }
+    [[nodiscard]] nlohmann::json to_json() const;
+};
+
+// Traces every pixel of `camera` (world coordinates) against `field` (its local frame: the
+// field's world offset is subtracted from each ray in double). Progress counts pixels;
+// cancellation is checked per tile and throws Cancelled. InputError when the settings ask for
+// grid tracing of a set that is not a grid, or for a tile size below 1.
+[[nodiscard]] RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
+                                              const RenderSettings& settings = {},
+                                              Progress* progress = nullptr,
+                                              RenderStats* stats = nullptr);
+
+// The counts of an image already rendered (status and steps channels; seconds left 0).
+[[nodiscard]] RenderStats stats_of(const RenderedImage& image);
+
+// Loads the probe set in `folder`, reads the camera JSON, renders, and writes the EXR to
+// `output_path` with the camera, the settings and the stats as metadata. Returns the stats.
+RenderStats render_probe_view_to_exr(const std::string& folder, const std::string& camera_path,
+                                     const std::string& output_path,
+                                     const RenderSettings& settings = {},
+                                     Progress* progress = nullptr);
+
+// The settings as JSON (for metadata and reports).
+[[nodiscard]] nlohmann::json render_settings_json(const RenderSettings& settings);
+
+} // namespace lfprobe

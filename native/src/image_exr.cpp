@@ -1,0 +1,147 @@
+#include "lfprobe/image_exr.hpp"
+
+#include <filesystem>
+#include <limits>
+
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfStringAttribute.h>
+
+#include "lfprobe/error.hpp"
+#include "lfprobe/probe_exr.hpp"
+
+namespace lfprobe {
+
+namespace {
+
+constexpr const char* kFormatAttribute = "lfprobe/format";
+constexpr const char* kFormatValue = "lfprobe-render 1";
+constexpr const char* kMetadataAttribute = "lfprobe/render";
+
+// The float planes of a file, in channel order.
+struct Planes {
+    std::vector<float> status;
+    std::vector<float> probe;
+    std::vector<float> steps;
+};
+
+Imf::FrameBuffer frame_buffer(RenderedImage& image, Planes& planes) {
+    const std::size_t w = static_cast<std::size_t>(image.width);
+    Imf::FrameBuffer fb;
+    auto interleaved = [&](const char* name, float* base, std::size_t stride) {
+        fb.insert(name, Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(base),
+                                   stride * sizeof(float), stride * sizeof(float) * w));
+    };
+    const char* rgba_names[4] = {"R", "G", "B", "A"};
+    for (std::size_t c = 0; c < 4; ++c) {
+        interleaved(rgba_names[c], image.rgba.data() + c, 4);
+    }
+    interleaved("Z", image.depth.data(), 1);
+    const char* normal_names[3] = {"N.X", "N.Y", "N.Z"};
+    for (std::size_t c = 0; c < 3; ++c) {
+        interleaved(normal_names[c], image.normal.data() + c, 3);
+    }
+    interleaved("status", planes.status.data(), 1);
+    interleaved("probe", planes.probe.data(), 1);
+    interleaved("steps", planes.steps.data(), 1);
+    return fb;
+}
+
+constexpr const char* kChannels[] = {"R",   "G",   "B",      "A",     "Z",    "N.X",
+                                     "N.Y", "N.Z", "status", "probe", "steps"};
+
+} // namespace
+
+RenderedImage::RenderedImage(int w, int h)
+    : width(w), height(h), rgba(pixel_count() * 4, 0.0f),
+      depth(pixel_count(), std::numeric_limits<float>::infinity()), normal(pixel_count() * 3, 0.0f),
+      status(pixel_count(), 0), probe(pixel_count(), -1), steps(pixel_count(), 0) {}
+
+void write_rendered_exr(const std::string& path, const RenderedImage& image,
+                        const std::string& metadata) {
+    if (image.width < 1 || image.height < 1) {
+        throw InputError(path + ": cannot write an empty image");
+    }
+    const std::size_t n = image.pixel_count();
+    Planes planes;
+    planes.status.resize(n);
+    planes.probe.resize(n);
+    planes.steps.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        planes.status[i] = static_cast<float>(image.status[i]);
+        planes.probe[i] = static_cast<float>(image.probe[i]);
+        planes.steps[i] = static_cast<float>(image.steps[i]);
+    }
+    Imf::Header header(image.width, image.height);
+    header.compression() = Imf::ZIP_COMPRESSION;
+    for (const char* name : kChannels) {
+        header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    }
+    header.insert(kFormatAttribute, Imf::StringAttribute(kFormatValue));
+    if (!metadata.empty()) {
+        header.insert(kMetadataAttribute, Imf::StringAttribute(metadata));
+    }
+    const std::string tmp = temporary_path_for(path);
+    try {
+        {
+            Imf::OutputFile file(tmp.c_str(), header);
+            // The writer only reads through the slices; one layout serves both directions.
+            file.setFrameBuffer(frame_buffer(const_cast<RenderedImage&>(image), planes));
+            file.writePixels(image.height);
+        }
+        std::filesystem::rename(tmp, path);
+    } catch (const std::exception& e) {
+        std::error_code ignored;
+        std::filesystem::remove(tmp, ignored);
+        throw IoError(path + ": cannot write rendered EXR (" + e.what() + ")");
+    }
+}
+
+RenderedImage read_rendered_exr(const std::string& path, std::string* metadata) {
+    if (!std::filesystem::exists(path)) {
+        throw IoError(path + ": no such image");
+    }
+    try {
+        Imf::InputFile file(path.c_str());
+        const Imath::Box2i window = file.header().dataWindow();
+        const int w = window.max.x - window.min.x + 1;
+        const int h = window.max.y - window.min.y + 1;
+        if (window.min.x != 0 || window.min.y != 0 || w < 1 || h < 1) {
+            throw InputError(path + ": expected a data window starting at (0, 0)");
+        }
+        for (const char* name : kChannels) {
+            if (file.header().channels().findChannel(name) == nullptr) {
+                throw InputError(path + ": expected channel '" + name +
+                                 "' of a rendered image (R G B A Z N.X N.Y N.Z status probe "
+                                 "steps)");
+            }
+        }
+        if (metadata != nullptr) {
+            const auto* attr =
+                file.header().findTypedAttribute<Imf::StringAttribute>(kMetadataAttribute);
+            *metadata = attr != nullptr ? attr->value() : std::string();
+        }
+        RenderedImage image(w, h);
+        Planes planes;
+        planes.status.resize(image.pixel_count());
+        planes.probe.resize(image.pixel_count());
+        planes.steps.resize(image.pixel_count());
+        file.setFrameBuffer(frame_buffer(image, planes));
+        file.readPixels(0, h - 1);
+        for (std::size_t i = 0; i < image.pixel_count(); ++i) {
+            image.status[i] = static_cast<std::uint8_t>(planes.status[i]);
+            image.probe[i] = static_cast<std::int32_t>(planes.probe[i]);
+            image.steps[i] = static_cast<std::uint32_t>(planes.steps[i]);
+        }
+        return image;
+    } catch (const InputError&) {
+        throw;
+    } catch (const std::exception& e) {
+        throw InputError(path + ": not a readable rendered EXR (" + e.what() + ")");
+    }
+}
+
+} // namespace lfprobe

@@ -1,0 +1,410 @@
+#include "lfprobe/probe_field.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <utility>
+
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include "lfprobe/error.hpp"
+
+namespace lfprobe {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Probes a ray already asked, and how far each proved the ray free: asking again from no
+// further on would give the same UNKNOWN.
+class TriedProbes {
+public:
+    [[nodiscard]] bool worth_asking(std::size_t probe, double from) const {
+        for (std::size_t i = 0; i < count_; ++i) {
+            if (entries_[i].first == probe) {
+                return from > entries_[i].second;
+            }
+        }
+        return true;
+    }
+    void remember(std::size_t probe, double free_until) {
+        for (std::size_t i = 0; i < count_; ++i) {
+            if (entries_[i].first == probe) {
+                entries_[i].second = free_until;
+                return;
+            }
+        }
+        // Oldest entries make room: re-asking a probe is only wasted work, never wrong.
+        entries_[next_] = {probe, free_until};
+        next_ = (next_ + 1) % entries_.size();
+        count_ = std::min(count_ + 1, entries_.size());
+    }
+
+private:
+    std::array<std::pair<std::size_t, double>, 32> entries_{};
+    std::size_t count_ = 0;
+    std::size_t next_ = 0;
+};
+
+// Asks probe `index` about the ray from `state.free_until` on; true when it answered.
+struct FieldQuery {
+    const ProbeField& field;
+    const Ray& ray;
+    const TraceSettings& settings;
+    FieldTraceResult result;
+
+    bool ask(std::size_t index) {
+        Ray local = ray;
+        local.t_min = std::max(ray.t_min, result.free_until);
+        const ProbeTraceResult r = field.trace_one(index, local, settings);
+        result.steps += r.steps();
+        ++result.probes_tried;
+        if (r.status == TraceStatus::Unknown) {
+            result.free_until = std::max(result.free_until, r.free_until);
+            return false;
+        }
+        result.status = r.status;
+        result.t = r.t;
+        result.free_until = r.free_until;
+        result.radiance = r.radiance;
+        result.normal = r.normal;
+        result.probe = static_cast<int>(index);
+        result.texel = r.texel;
+        return true;
+    }
+};
+
+// Candidate probes ordered by squared distance to `point`, ties by index (deterministic).
+struct Candidate {
+    double distance2;
+    std::size_t index;
+    friend bool operator<(const Candidate& a, const Candidate& b) {
+        return a.distance2 < b.distance2 || (a.distance2 == b.distance2 && a.index < b.index);
+    }
+};
+
+// Asks the candidates in order, again while one of them pushed the proven-free distance past
+// where another had stopped (that one may now see further), up to a few passes. True when a
+// probe answered.
+bool ask_in_passes(FieldQuery& query, TriedProbes& tried, const Candidate* candidates,
+                   std::size_t count) {
+    constexpr int kMaxPasses = 4;
+    for (int pass = 0; pass < kMaxPasses; ++pass) {
+        const double before = query.result.free_until;
+        for (std::size_t k = 0; k < count; ++k) {
+            const std::size_t index = candidates[k].index;
+            if (!tried.worth_asking(index, std::max(query.ray.t_min, query.result.free_until))) {
+                continue;
+            }
+            if (query.ask(index)) {
+                return true;
+            }
+            tried.remember(index, query.result.free_until);
+        }
+        if (!(query.result.free_until > before)) {
+            break;
+        }
+    }
+    return false;
+}
+
+// Sorts a handful of candidates (std::sort on a small std::array trips GCC 12's
+// -Warray-bounds).
+void sort_candidates(Candidate* first, std::size_t count) {
+    for (std::size_t i = 1; i < count; ++i) {
+        const Candidate c = first[i];
+        std::size_t j = i;
+        for (; j > 0 && c < first[j - 1]; --j) {
+            first[j] = first[j - 1];
+        }
+        first[j] = c;
+    }
+}
+
+} // namespace
+
+FieldMode field_mode_from_name(const std::string& name) {
+    if (name == "auto") {
+        return FieldMode::Auto;
+    }
+    if (name == "nearest") {
+        return FieldMode::Nearest;
+    }
+    if (name == "grid") {
+        return FieldMode::Grid;
+    }
+    throw InputError("probe field: mode '" + name + "' is not one of auto, nearest, grid");
+}
+
+const char* field_mode_name(FieldMode mode) {
+    switch (mode) {
+    case FieldMode::Nearest:
+        return "nearest";
+    case FieldMode::Grid:
+        return "grid";
+    case FieldMode::Auto:
+        break;
+    }
+    return "auto";
+}
+
+ProbeField ProbeField::load(const std::string& folder, Progress* progress) {
+    ProbeField field;
+    field.manifest_ = read_manifest(folder);
+    const std::size_t count = field.manifest_.probes.size();
+    if (count == 0) {
+        throw InputError(folder + ": the probe set holds no probes");
+    }
+    field.check_placement();
+    if (progress != nullptr) {
+        progress->begin_stage("loading probes", count);
+    }
+    field.probes_.resize(count);
+    field.levels_.resize(count);
+    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
+        if (progress != nullptr) {
+            progress->throw_if_cancelled();
+        }
+        field.probes_[i] = read_probe(folder, field.manifest_, i);
+        field.levels_[i] =
+            MinDistancePyramid(field.probes_[i].distance, field.probes_[i].resolution);
+        if (progress != nullptr) {
+            progress->advance(1);
+        }
+    });
+    return field;
+}
+
+ProbeField::ProbeField(const ProbePlacement& placement, std::vector<ProbeMap> probes,
+                       const glm::dvec3& world_offset)
+    : probes_(std::move(probes)) {
+    manifest_.world_offset = world_offset;
+    manifest_.placement = placement;
+    if (probes_.empty()) {
+        throw InputError("probe field: no probes given");
+    }
+    for (std::size_t i = 0; i < probes_.size(); ++i) {
+        ProbeRecord record;
+        record.file = probe_file_name(i);
+        record.position = probes_[i].position;
+        record.resolution = probes_[i].resolution;
+        manifest_.probes.push_back(record);
+    }
+    check_placement();
+    build_levels(nullptr);
+}
+
+void ProbeField::build_levels(Progress* progress) {
+    levels_.resize(probes_.size());
+    tbb::parallel_for(std::size_t{0}, probes_.size(), [&](std::size_t i) {
+        if (probes_[i].resolution < 1 || probes_[i].distance.size() != probes_[i].texel_count()) {
+            throw InputError("probe field: probe " + std::to_string(i) + " has no maps");
+        }
+        levels_[i] = MinDistancePyramid(probes_[i].distance, probes_[i].resolution);
+        if (progress != nullptr) {
+            progress->advance(1);
+        }
+    });
+}
+
+void ProbeField::check_placement() const {
+    const std::size_t count = manifest_.probes.size();
+    if (!manifest_.placement.is_grid) {
+        return;
+    }
+    const ProbeGrid& g = manifest_.placement.grid;
+    for (int a = 0; a < 3; ++a) {
+        const int c = g.counts[static_cast<std::size_t>(a)];
+        if (c < 1) {
+            throw InputError("probe field: grid counts must be at least 1 per axis");
+        }
+        if (c > 1 && !(g.spacing[a] > 0.0 && std::isfinite(g.spacing[a]))) {
+            throw InputError("probe field: grid spacing must be positive on an axis with " +
+                             std::to_string(c) + " probes");
+        }
+    }
+    if (g.probe_count() != count) {
+        throw InputError("probe field: the grid has " + std::to_string(g.probe_count()) +
+                         " probes but " + std::to_string(count) + " were given");
+    }
+}
+
+std::size_t ProbeField::memory_bytes() const {
+    std::size_t bytes = 0;
+    for (std::size_t i = 0; i < probes_.size(); ++i) {
+        bytes += probes_[i].memory_bytes() + levels_[i].memory_bytes();
+    }
+    return bytes;
+}
+
+FieldMode ProbeField::resolve_mode(const FieldTraceSettings& settings) const {
+    switch (settings.mode) {
+    case FieldMode::Auto:
+        return is_grid() ? FieldMode::Grid : FieldMode::Nearest;
+    case FieldMode::Grid:
+        if (!is_grid()) {
+            throw InputError("probe field: grid tracing needs a probe set laid out as a grid");
+        }
+        return FieldMode::Grid;
+    case FieldMode::Nearest:
+        break;
+    }
+    return FieldMode::Nearest;
+}
+
+ProbeTraceResult ProbeField::trace_one(std::size_t probe, const Ray& ray,
+                                       const TraceSettings& settings) const {
+    const ProbeMap& map = probes_.at(probe);
+    Ray local = ray;
+    local.origin = ray.origin - map.position;
+    return trace_probe(map, &levels_[probe], local, settings);
+}
+
+FieldTraceResult ProbeField::trace(const Ray& ray, const FieldTraceSettings& settings) const {
+    return resolve_mode(settings) == FieldMode::Grid ? trace_grid(ray, settings)
+                                                     : trace_nearest(ray, settings);
+}
+
+FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
+                                           const FieldTraceSettings& settings) const {
+    FieldQuery query{*this, ray, settings.probe, {}};
+    query.result.free_until = ray.t_min;
+    const std::size_t wanted =
+        std::min(probes_.size(), static_cast<std::size_t>(std::max(settings.max_probes, 1)));
+    // The `wanted` nearest, kept sorted in a small buffer.
+    std::array<Candidate, 64> best{};
+    const std::size_t keep = std::min(wanted, best.size());
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < probes_.size(); ++i) {
+        const glm::dvec3 to = probes_[i].position - ray.origin;
+        const Candidate c{glm::dot(to, to), i};
+        if (kept < keep) {
+            best[kept++] = c;
+            std::push_heap(best.begin(), best.begin() + static_cast<long>(kept));
+        } else if (c < best[0]) {
+            std::pop_heap(best.begin(), best.begin() + static_cast<long>(kept));
+            best[kept - 1] = c;
+            std::push_heap(best.begin(), best.begin() + static_cast<long>(kept));
+        }
+    }
+    std::sort_heap(best.begin(), best.begin() + static_cast<long>(kept));
+    TriedProbes tried;
+    if (ask_in_passes(query, tried, best.data(), kept)) {
+        return query.result;
+    }
+    query.result.status = TraceStatus::Unknown;
+    return query.result;
+}
+
+FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings& settings) const {
+    const ProbeGrid& g = grid();
+    // Cells per axis; an axis with one probe has one unbounded cell.
+    std::array<int, 3> cells{};
+    std::array<bool, 3> bounded{};
+    double t_enter = ray.t_min;
+    double t_exit = ray.t_max;
+    for (int a = 0; a < 3; ++a) {
+        const std::size_t ua = static_cast<std::size_t>(a);
+        bounded[ua] = g.counts[ua] > 1;
+        cells[ua] = bounded[ua] ? g.counts[ua] - 1 : 1;
+        if (!bounded[ua]) {
+            continue;
+        }
+        const double lo = g.origin[a];
+        const double hi = g.origin[a] + g.spacing[a] * static_cast<double>(g.counts[ua] - 1);
+        const double o = ray.origin[a];
+        const double d = ray.direction[a];
+        if (d == 0.0) {
+            if (o < lo || o > hi) {
+                t_enter = kInf; // parallel to the slab and outside it
+            }
+            continue;
+        }
+        double t0 = (lo - o) / d;
+        double t1 = (hi - o) / d;
+        if (t0 > t1) {
+            std::swap(t0, t1);
+        }
+        t_enter = std::max(t_enter, t0);
+        t_exit = std::min(t_exit, t1);
+    }
+    if (!(t_enter <= t_exit)) {
+        return trace_nearest(ray, settings); // the ray never meets the grid's box
+    }
+
+    // The cell where the ray is inside the box, clamped at the faces.
+    const glm::dvec3 start = ray.at(t_enter);
+    std::array<int, 3> cell{};
+    std::array<int, 3> step{};
+    for (int a = 0; a < 3; ++a) {
+        const std::size_t ua = static_cast<std::size_t>(a);
+        if (!bounded[ua]) {
+            continue;
+        }
+        const double f = std::floor((start[a] - g.origin[a]) / g.spacing[a]);
+        cell[ua] = static_cast<int>(std::clamp(f, 0.0, static_cast<double>(cells[ua] - 1)));
+        step[ua] = ray.direction[a] > 0.0 ? 1 : (ray.direction[a] < 0.0 ? -1 : 0);
+    }
+    auto boundary_t = [&](int a) {
+        const std::size_t ua = static_cast<std::size_t>(a);
+        if (!bounded[ua] || step[ua] == 0) {
+            return kInf;
+        }
+        const int face = cell[ua] + (step[ua] > 0 ? 1 : 0);
+        return (g.origin[a] + g.spacing[a] * static_cast<double>(face) - ray.origin[a]) /
+               ray.direction[a];
+    };
+
+    FieldQuery query{*this, ray, settings.probe, {}};
+    query.result.free_until = ray.t_min;
+    TriedProbes tried;
+    double cell_enter = t_enter;
+    const int max_cells = cells[0] + cells[1] + cells[2] + 3;
+    for (int visited = 0; visited < max_cells; ++visited) {
+        const std::array<double, 3> next{boundary_t(0), boundary_t(1), boundary_t(2)};
+        const double cell_leave = std::min({next[0], next[1], next[2], t_exit});
+        // A cell the ray already left behind the proven-free distance has nothing to add.
+        if (cell_leave >= query.result.free_until || visited == 0) {
+            const glm::dvec3 entry = ray.at(std::max(cell_enter, query.result.free_until));
+            std::array<Candidate, 8> corners{};
+            std::size_t corner_count = 0;
+            for (int dz = 0; dz <= (bounded[2] ? 1 : 0); ++dz) {
+                for (int dy = 0; dy <= (bounded[1] ? 1 : 0); ++dy) {
+                    for (int dx = 0; dx <= (bounded[0] ? 1 : 0); ++dx) {
+                        const std::size_t index = static_cast<std::size_t>(cell[0] + dx) +
+                                                  static_cast<std::size_t>(g.counts[0]) *
+                                                      (static_cast<std::size_t>(cell[1] + dy) +
+                                                       static_cast<std::size_t>(g.counts[1]) *
+                                                           static_cast<std::size_t>(cell[2] + dz));
+                        const glm::dvec3 to = probes_[index].position - entry;
+                        corners[corner_count++] = Candidate{glm::dot(to, to), index};
+                    }
+                }
+            }
+            sort_candidates(corners.data(), corner_count);
+            if (ask_in_passes(query, tried, corners.data(), corner_count)) {
+                return query.result;
+            }
+        }
+        if (cell_leave >= t_exit) {
+            break;
+        }
+        bool left_grid = false;
+        for (int a = 0; a < 3; ++a) {
+            const std::size_t ua = static_cast<std::size_t>(a);
+            if (next[ua] <= cell_leave) {
+                cell[ua] += step[ua];
+                left_grid = left_grid || cell[ua] < 0 || cell[ua] >= cells[ua];
+            }
+        }
+        if (left_grid) {
+            break;
+        }
+        cell_enter = cell_leave;
+    }
+    query.result.status = TraceStatus::Unknown;
+    return query.result;
+}
+
+} // namespace lfprobe

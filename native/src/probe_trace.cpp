@@ -1,0 +1,539 @@
+#include "lfprobe/probe_trace.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include <glm/geometric.hpp>
+
+#include "lfprobe/error.hpp"
+
+namespace lfprobe {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+// The angular size of a texel of an N×N octahedral map is about sqrt(4π)/N (4π sr over N²).
+constexpr double kTexelAngleTimesN = 3.5449077018110318;
+constexpr int kMaxLevels = 32;
+
+[[nodiscard]] double sign_not_zero(double a) {
+    return a >= 0.0 ? 1.0 : -1.0;
+}
+
+[[nodiscard]] int sign_of(double a) {
+    return a > 0.0 ? 1 : (a < 0.0 ? -1 : 0);
+}
+
+// One map coordinate (u or v) inside one octant, as a function of the ray parameter:
+// p(t) = (num0 + t num1) / (den0 + t den1), the octahedral p = 2u − 1 of DESIGN.md §3 with the
+// octant's signs fixed, which makes numerator and denominator (the L1 norm) linear in t.
+struct OctantCoordinate {
+    double num0 = 0.0;
+    double num1 = 0.0;
+    int step = 0; // +1, −1: the coordinate grows or shrinks along the ray; 0: constant
+};
+
+struct OctantMap {
+    OctantCoordinate u;
+    OctantCoordinate v;
+    double den0 = 0.0;
+    double den1 = 0.0;
+};
+
+// A texel the ray passed just in front of (within the thickness): the hit if the ray then
+// turns up behind the next surface.
+struct NearMiss {
+    bool valid = false;
+    oct::Texel texel;
+    std::size_t index = 0;
+    double t = 0.0;
+    double t_enter = 0.0;
+};
+
+class Tracer {
+public:
+    Tracer(const ProbeMap& map, const MinDistancePyramid* levels, const glm::dvec3& origin,
+           const glm::dvec3& direction, const TraceSettings& settings)
+        : map_(map), n_(map.resolution), o_(origin), d_(direction), settings_(settings) {
+        b_ = glm::dot(o_, d_);
+        const glm::dvec3 closest = o_ - b_ * d_;
+        perp2_ = glm::dot(closest, closest);
+        origin_length_ = glm::length(o_);
+        texel_scale_ = settings.thickness_texels * kTexelAngleTimesN / static_cast<double>(n_);
+        if (levels != nullptr && settings.use_coarse_levels && texel_scale_ < 1.0) {
+            levels_ = &levels->levels();
+            level_count_ = std::min(static_cast<int>(levels_->size()), kMaxLevels);
+        }
+    }
+
+    // Judges fine texel (x, y) over the ray interval [t0, t1]; true when the trace is decided.
+    bool visit_texel(int x, int y, double t0, double t1) {
+        if (!(t1 > t0)) {
+            return false; // the ray only touches the texel at a point
+        }
+        ++result_.fine_steps;
+        const std::size_t i = oct::texel_index({x, y}, n_);
+        const double far = max_distance(t0, t1);
+        if (far <= settings_.eye_at_probe_distance) {
+            // Within this ball around the probe centre nothing can be: the probe stood there.
+            near_miss_.valid = false;
+            return false;
+        }
+        const double r = static_cast<double>(map_.distance[i]);
+        if (std::isnan(r)) {
+            return stop_unknown({x, y}, t0);
+        }
+        if (std::isinf(r)) {
+            near_miss_.valid = false;
+            return false;
+        }
+        const double thick = thickness(r);
+        if (far < r) {
+            if (far >= r - thick) {
+                const double t_far = distance2(t0) >= distance2(t1) ? t0 : t1;
+                near_miss_ = NearMiss{true, {x, y}, i, t_far, t0};
+            } else {
+                near_miss_.valid = false;
+            }
+            return false;
+        }
+        const double near = min_distance(t0, t1);
+        if (near > r + thick) {
+            // Behind the surface the probe saw, without meeting it here.
+            if (near_miss_.valid) {
+                return meet(near_miss_.texel, near_miss_.index, near_miss_.t, near_miss_.t_enter);
+            }
+            return stop_unknown({x, y}, t0);
+        }
+        return meet({x, y}, i, solve_hit(r, t0, t1), t0);
+    }
+
+    // Walks the piece [ta, tb] that stays in the octant of signs `s`; true when decided.
+    bool walk_piece(double ta, double tb, const glm::dvec3& s) {
+        const bool lower = s.z < 0.0;
+        OctantMap m;
+        m.den0 = glm::dot(s, o_);
+        m.den1 = glm::dot(s, d_);
+        // Upper hemisphere: p = (x, y) / L1. Lower: p = ((x − s_x z), (y − s_y z)) / L1.
+        m.u.num0 = o_.x - (lower ? s.x * o_.z : 0.0);
+        m.u.num1 = d_.x - (lower ? s.x * d_.z : 0.0);
+        m.v.num0 = o_.y - (lower ? s.y * o_.z : 0.0);
+        m.v.num1 = d_.y - (lower ? s.y * d_.z : 0.0);
+        m.u.step = sign_of(m.u.num1 * m.den0 - m.u.num0 * m.den1);
+        m.v.step = sign_of(m.v.num1 * m.den0 - m.v.num0 * m.den1);
+
+        piece_start_ = ta;
+        int x = start_index(m, m.u, ta);
+        int y = start_index(m, m.v, ta);
+        double t = ta;
+
+        std::array<int, kMaxLevels> memo_x;
+        std::array<int, kMaxLevels> memo_y;
+        memo_x.fill(-1);
+        memo_y.fill(-1);
+
+        // Hierarchical walk in the manner of Hi-Z tracing: test the coarse cell around the
+        // current texel; skip it whole when nothing in it can stop the ray and try the next
+        // coarser level, otherwise descend; after a fine texel, start again one level up.
+        // Cells found not skippable are remembered so that they are not tested again.
+        const int top = level_count_ - 1;
+        int level = top >= 0 ? 0 : -1;
+        const long max_iterations = 16L * n_ + 64L * (level_count_ + 1);
+        for (long iteration = 0; iteration < max_iterations; ++iteration) {
+            if (level >= 0) {
+                const std::size_t l = static_cast<std::size_t>(level);
+                const int shift = level + 1;
+                const int cx = x >> shift;
+                const int cy = y >> shift;
+                if (memo_x[l] == cx && memo_y[l] == cy) {
+                    --level;
+                    continue;
+                }
+                ++result_.coarse_steps;
+                const MinDistanceLevel& lv = (*levels_)[l];
+                const double cell_min = static_cast<double>(
+                    lv.min_distance[static_cast<std::size_t>(cy) *
+                                        static_cast<std::size_t>(lv.resolution) +
+                                    static_cast<std::size_t>(cx)]);
+                const double t_exit = std::max(
+                    std::min({cell_exit(m, m.u, cx, shift), cell_exit(m, m.v, cy, shift), tb}), t);
+                if (skippable(cell_min, t, t_exit)) {
+                    const int nx = advance(m, m.u, x, t_exit);
+                    const int ny = advance(m, m.v, y, t_exit);
+                    if (t_exit > t || nx != x || ny != y) {
+                        if (t_exit > t) {
+                            near_miss_.valid = false; // every texel passed was clearly in front
+                        }
+                        if (t_exit >= tb) {
+                            return false;
+                        }
+                        x = nx;
+                        y = ny;
+                        t = t_exit;
+                        level = std::min(level + 1, top);
+                        continue;
+                    }
+                }
+                memo_x[l] = cx;
+                memo_y[l] = cy;
+                --level;
+                continue;
+            }
+            const double tnx = next_crossing(m, m.u, x);
+            const double tny = next_crossing(m, m.v, y);
+            const double t_next = std::max(std::min({tnx, tny, tb}), t);
+            if (visit_texel(x, y, t, t_next)) {
+                return true;
+            }
+            if (t_next >= tb) {
+                return false;
+            }
+            if (tnx <= t_next) {
+                x += m.u.step;
+            }
+            if (tny <= t_next) {
+                y += m.v.step;
+            }
+            t = t_next;
+            level = top >= 0 ? 0 : -1;
+        }
+        // Unreachable for a monotone walk; a guard against looping on corrupt input.
+        return stop_unknown({x, y}, t);
+    }
+
+    // Passing through the ball around the probe centre, the ray forgets a surface it passed
+    // just in front of: it went on past the probe.
+    void pass_the_centre() { near_miss_.valid = false; }
+
+    void finish_miss(double t_max) {
+        result_.status = TraceStatus::Miss;
+        result_.t = kInf;
+        result_.free_until = t_max;
+        result_.texel = {-1, -1};
+    }
+
+    [[nodiscard]] const ProbeTraceResult& result() const { return result_; }
+
+private:
+    // |o + t d|², written around the closest approach so that it does not cancel near it.
+    [[nodiscard]] double distance2(double t) const {
+        const double along = t + b_;
+        return perp2_ + along * along;
+    }
+    [[nodiscard]] double max_distance(double t0, double t1) const {
+        if (!std::isfinite(t1)) {
+            return kInf;
+        }
+        return std::sqrt(std::max(distance2(t0), distance2(t1)));
+    }
+    [[nodiscard]] double min_distance(double t0, double t1) const {
+        return std::sqrt(distance2(std::clamp(-b_, t0, t1)));
+    }
+    [[nodiscard]] double thickness(double r) const {
+        return settings_.thickness + texel_scale_ * r;
+    }
+
+    // The ray parameter where coordinate `c` crosses texel edge `edge` (u or v = edge / N):
+    // the plane through the probe centre with normal grad(num) − a grad(den), a = 2 edge/N − 1.
+    // +inf when the ray meets that plane outside this octant (the other branch of p(t)).
+    [[nodiscard]] double plane_crossing(const OctantMap& m, const OctantCoordinate& c,
+                                        int edge) const {
+        const double a = 2.0 * static_cast<double>(edge) / static_cast<double>(n_) - 1.0;
+        const double denominator = c.num1 - a * m.den1;
+        if (denominator == 0.0) {
+            return kInf;
+        }
+        const double t = (a * m.den0 - c.num0) / denominator;
+        // Where the L1 norm is not positive the plane is met outside this octant.
+        return m.den0 + t * m.den1 > 0.0 ? t : kInf;
+    }
+    // The crossing as the walk sees it: an edge crossed before the piece started is behind the
+    // walk already (the start index accounts for it), not ahead.
+    [[nodiscard]] double crossing(const OctantMap& m, const OctantCoordinate& c, int edge) const {
+        const double t = plane_crossing(m, c, edge);
+        return t < piece_start_ ? kInf : t;
+    }
+
+    // When the walk leaves texel `index` along `c` (the next edge in the step's direction).
+    [[nodiscard]] double next_crossing(const OctantMap& m, const OctantCoordinate& c,
+                                       int index) const {
+        if (c.step > 0) {
+            return index + 1 < n_ ? crossing(m, c, index + 1) : kInf;
+        }
+        if (c.step < 0) {
+            return index > 0 ? crossing(m, c, index) : kInf;
+        }
+        return kInf;
+    }
+
+    // When the walk leaves coarse cell `cell` (fine texels [cell << shift, (cell+1) << shift)).
+    [[nodiscard]] double cell_exit(const OctantMap& m, const OctantCoordinate& c, int cell,
+                                   int shift) const {
+        if (c.step > 0) {
+            const int edge = (cell + 1) << shift;
+            return edge < n_ ? crossing(m, c, edge) : kInf;
+        }
+        if (c.step < 0) {
+            const int edge = cell << shift;
+            return edge > 0 ? crossing(m, c, edge) : kInf;
+        }
+        return kInf;
+    }
+
+    // The fine index after every edge crossed up to t_exit: the same comparisons the fine walk
+    // makes, so that a skip lands exactly where the fine walk would be.
+    [[nodiscard]] int advance(const OctantMap& m, const OctantCoordinate& c, int index,
+                              double t_exit) const {
+        if (c.step > 0) {
+            while (index + 1 < n_ && crossing(m, c, index + 1) <= t_exit) {
+                ++index;
+            }
+        } else if (c.step < 0) {
+            while (index > 0 && crossing(m, c, index) <= t_exit) {
+                --index;
+            }
+        }
+        return index;
+    }
+
+    // The texel index of coordinate `c` at t_eval. Next to an edge the crossing time decides,
+    // as the walk itself would, instead of the rounding of p.
+    [[nodiscard]] int start_index(const OctantMap& m, const OctantCoordinate& c,
+                                  double t_eval) const {
+        const double den = m.den0 + t_eval * m.den1;
+        double p = den > 0.0 ? (c.num0 + t_eval * c.num1) / den : 0.0;
+        if (!std::isfinite(p)) {
+            p = 0.0;
+        }
+        p = std::clamp(p, -1.0, 1.0);
+        const double g = (0.5 * p + 0.5) * static_cast<double>(n_);
+        int index = std::clamp(static_cast<int>(std::floor(g)), 0, n_ - 1);
+        const double nearest_edge = std::round(g);
+        const int edge = static_cast<int>(nearest_edge);
+        if (c.step != 0 && std::abs(g - nearest_edge) < 1e-3 && edge > 0 && edge < n_) {
+            const double t_edge = plane_crossing(m, c, edge);
+            if (std::isfinite(t_edge)) {
+                if (c.step > 0) {
+                    index = t_edge <= t_eval ? edge : edge - 1;
+                } else {
+                    index = t_edge <= t_eval ? edge - 1 : edge;
+                }
+            }
+        }
+        return index;
+    }
+
+    // True when no fine texel under a coarse cell of minimum distance `cell_min` can stop the
+    // ray over [t0, t1]: each is empty or clearly behind the ray (r − thickness(r) > the ray's
+    // largest distance; r − thickness(r) grows with r since texel_scale_ < 1).
+    [[nodiscard]] bool skippable(double cell_min, double t0, double t1) const {
+        if (std::isinf(cell_min)) {
+            return true;
+        }
+        const double far = max_distance(t0, t1);
+        const double margin = 1e-9 * (1.0 + cell_min);
+        return far < cell_min - thickness(cell_min) - margin;
+    }
+
+    // The first t in [t0, t1] with |o + t d| = r (t² + 2bt + c = 0, stable form), or, when
+    // the ray only comes within the thickness, the t where it comes closest to r.
+    [[nodiscard]] double solve_hit(double r, double t0, double t1) const {
+        const double p = std::sqrt(perp2_);
+        const double disc = (r - p) * (r + p);
+        double best = kInf;
+        if (disc >= 0.0) {
+            const double s = std::sqrt(disc);
+            const double q = -(b_ + (b_ >= 0.0 ? s : -s));
+            const double c = (origin_length_ - r) * (origin_length_ + r);
+            const double root_a = q;
+            const double root_b = q != 0.0 ? c / q : -b_;
+            for (const double root : {std::min(root_a, root_b), std::max(root_a, root_b)}) {
+                if (root >= t0 && root <= t1) {
+                    best = root;
+                    break;
+                }
+            }
+        }
+        if (std::isfinite(best)) {
+            return best;
+        }
+        double best_error = kInf;
+        for (const double t : {t0, std::clamp(-b_, t0, t1), t1}) {
+            if (!std::isfinite(t)) {
+                continue;
+            }
+            const double error = std::abs(std::sqrt(distance2(t)) - r);
+            if (error < best_error) {
+                best_error = error;
+                best = t;
+            }
+        }
+        return best;
+    }
+
+    bool meet(oct::Texel texel, std::size_t index, double t, double t_enter) {
+        const glm::vec3 normal = map_.normal_at(index);
+        if (glm::dot(glm::dvec3(normal), d_) > 0.0) {
+            return stop_unknown(texel, t_enter); // the back of a surface: what is in front of it?
+        }
+        result_.status = TraceStatus::Hit;
+        result_.t = t;
+        result_.free_until = t;
+        result_.texel = texel;
+        result_.radiance = map_.radiance_at(index);
+        result_.normal = normal;
+        return true;
+    }
+
+    bool stop_unknown(oct::Texel texel, double t_enter) {
+        result_.status = TraceStatus::Unknown;
+        result_.t = kInf;
+        result_.free_until = t_enter;
+        result_.texel = texel;
+        return true;
+    }
+
+    const ProbeMap& map_;
+    int n_;
+    glm::dvec3 o_;
+    glm::dvec3 d_;
+    const TraceSettings& settings_;
+    const std::vector<MinDistanceLevel>* levels_ = nullptr;
+    int level_count_ = 0;
+    double b_ = 0.0;
+    double perp2_ = 0.0;
+    double origin_length_ = 0.0;
+    double texel_scale_ = 0.0;
+    double piece_start_ = 0.0;
+    NearMiss near_miss_;
+    ProbeTraceResult result_;
+};
+
+void check_inputs(const ProbeMap& map, const glm::dvec3& direction) {
+    if (map.resolution < 1 || map.distance.size() != map.texel_count()) {
+        throw InputError("probe trace: the probe map is empty or inconsistent (resolution " +
+                         std::to_string(map.resolution) + ")");
+    }
+    if (!std::isfinite(direction.x) || !std::isfinite(direction.y) || !std::isfinite(direction.z) ||
+        glm::dot(direction, direction) == 0.0) {
+        throw InputError("probe trace: the ray direction must be finite and non-zero");
+    }
+}
+
+} // namespace
+
+const char* trace_status_name(TraceStatus status) {
+    switch (status) {
+    case TraceStatus::Miss:
+        return "MISS";
+    case TraceStatus::Hit:
+        return "HIT";
+    case TraceStatus::Unknown:
+        break;
+    }
+    return "UNKNOWN";
+}
+
+double surface_thickness(const TraceSettings& settings, double distance, int n) {
+    return settings.thickness +
+           settings.thickness_texels * kTexelAngleTimesN / static_cast<double>(n) * distance;
+}
+
+ProbeTraceResult lookup_probe(const ProbeMap& map, const glm::dvec3& direction, double t_min,
+                              double t_max, const TraceSettings& settings) {
+    check_inputs(map, direction);
+    const glm::dvec3 d = glm::normalize(direction);
+    Tracer tracer(map, nullptr, glm::dvec3(0.0), d, settings);
+    const oct::Texel texel = oct::texel_of_direction(glm::vec3(d), map.resolution);
+    if (!(t_max > t_min) || !tracer.visit_texel(texel.x, texel.y, t_min, t_max)) {
+        tracer.finish_miss(t_max);
+    }
+    return tracer.result();
+}
+
+ProbeTraceResult trace_probe(const ProbeMap& map, const MinDistancePyramid* levels, const Ray& ray,
+                             const TraceSettings& settings) {
+    check_inputs(map, ray.direction);
+    const glm::dvec3 d = glm::normalize(ray.direction);
+    const glm::dvec3& o = ray.origin;
+    if (glm::length(o) <= settings.eye_at_probe_distance) {
+        return lookup_probe(map, d, ray.t_min, ray.t_max, settings);
+    }
+    Tracer tracer(map, levels, o, d, settings);
+    const double t_lo = ray.t_min;
+    const double t_hi = ray.t_max;
+    if (!(t_hi > t_lo)) {
+        tracer.finish_miss(t_hi);
+        return tracer.result();
+    }
+    // Where the ray crosses the probe's axis planes: the octant boundaries.
+    // The ball of radius eye_at_probe_distance around the centre, where directions from the
+    // centre are undefined: the walk resumes after it with the texel of the position there.
+    const double ball_radius = settings.eye_at_probe_distance;
+    const glm::dvec3 closest = o - glm::dot(o, d) * d;
+    const double perp2 = glm::dot(closest, closest);
+    double ball_in = kInf;
+    double ball_out = kInf;
+    if (perp2 < ball_radius * ball_radius) {
+        const double half = std::sqrt(ball_radius * ball_radius - perp2);
+        ball_in = -glm::dot(o, d) - half;
+        ball_out = -glm::dot(o, d) + half;
+    }
+    std::array<double, 3> plane_t{kInf, kInf, kInf};
+    std::array<double, 5> cuts{};
+    std::size_t cut_count = 0;
+    cuts[cut_count++] = t_lo;
+    for (int axis = 0; axis < 3; ++axis) {
+        if (d[axis] != 0.0) {
+            plane_t[static_cast<std::size_t>(axis)] = -o[axis] / d[axis];
+            const double t = plane_t[static_cast<std::size_t>(axis)];
+            if (t > t_lo && t < t_hi) {
+                cuts[cut_count++] = t;
+            }
+        }
+    }
+    // At most three inner cuts: an insertion sort.
+    for (std::size_t i = 2; i < cut_count; ++i) {
+        for (std::size_t j = i; j > 1 && cuts[j] < cuts[j - 1]; --j) {
+            std::swap(cuts[j], cuts[j - 1]);
+        }
+    }
+    cuts[cut_count++] = t_hi;
+    for (std::size_t piece = 0; piece + 1 < cut_count; ++piece) {
+        const double ta = cuts[piece];
+        const double tb = cuts[piece + 1];
+        if (!(tb > ta)) {
+            continue;
+        }
+        const double t_mid = std::isfinite(tb) ? ta + 0.5 * (tb - ta) : ta + 1.0 + std::abs(ta);
+        glm::dvec3 signs;
+        for (int axis = 0; axis < 3; ++axis) {
+            if (d[axis] == 0.0) {
+                signs[axis] = sign_not_zero(o[axis]);
+            } else {
+                const double side = t_mid > plane_t[static_cast<std::size_t>(axis)] ? 1.0 : -1.0;
+                signs[axis] = side * (d[axis] > 0.0 ? 1.0 : -1.0);
+            }
+        }
+        const double before_ball = std::min(tb, ball_in);
+        if (before_ball > ta && tracer.walk_piece(ta, before_ball, signs)) {
+            return tracer.result();
+        }
+        const double after_ball = std::max(ta, ball_out);
+        if (after_ball < tb) {
+            if (after_ball > ta) {
+                tracer.pass_the_centre();
+            }
+            if (tracer.walk_piece(after_ball, tb, signs)) {
+                return tracer.result();
+            }
+        }
+    }
+    tracer.finish_miss(t_hi);
+    return tracer.result();
+}
+
+} // namespace lfprobe

@@ -1,0 +1,285 @@
+// Several probes (DESIGN.md §4 "Many probes"): grid walks with any counts, cameras outside the
+// grid, rays through probe centres, nearest-first tracing that carries the free distance, and
+// loading a baked set from disk.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "lfprobe/error.hpp"
+#include "lfprobe/probe_field.hpp"
+#include "lfprobe/probe_set.hpp"
+#include "trace_scenes.hpp"
+
+using namespace lfprobe;
+using lfprobe::testing::BoxRoomScene;
+namespace scenes = lfprobe::testing;
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+Ray make_ray(const glm::dvec3& origin, const glm::dvec3& dir, double t_min = 0.0) {
+    Ray ray;
+    ray.origin = origin;
+    ray.direction = glm::normalize(dir);
+    ray.t_min = t_min;
+    ray.t_max = kInf;
+    return ray;
+}
+
+double truth(const BoxRoomScene& scene, const Ray& ray) {
+    return static_cast<double>(scene.distance(glm::vec3(ray.origin), glm::vec3(ray.direction)));
+}
+
+struct Tally {
+    std::size_t rays = 0;
+    std::size_t counts[3] = {0, 0, 0};
+    std::vector<double> errors;
+    std::uint64_t steps = 0;
+    std::uint64_t probes = 0;
+
+    void add(const FieldTraceResult& r, double exact) {
+        ++rays;
+        ++counts[static_cast<int>(r.status)];
+        steps += r.steps;
+        probes += r.probes_tried;
+        if (r.status == TraceStatus::Hit) {
+            errors.push_back(std::abs(r.t - exact));
+        }
+    }
+    [[nodiscard]] double rate(TraceStatus s) const {
+        return static_cast<double>(counts[static_cast<int>(s)]) / static_cast<double>(rays);
+    }
+    [[nodiscard]] double percentile(double q) {
+        std::sort(errors.begin(), errors.end());
+        return errors.empty()
+                   ? 0.0
+                   : errors[static_cast<std::size_t>(q * static_cast<double>(errors.size() - 1))];
+    }
+    void print(const char* what) {
+        std::printf("%s: %zu rays, hit %.4f, unknown %.4f, miss %.4f; depth error median %.3g m, "
+                    "95%% %.3g m; %.1f steps and %.2f probes per ray\n",
+                    what, rays, rate(TraceStatus::Hit), rate(TraceStatus::Unknown),
+                    rate(TraceStatus::Miss), percentile(0.5), percentile(0.95),
+                    static_cast<double>(steps) / static_cast<double>(rays),
+                    static_cast<double>(probes) / static_cast<double>(rays));
+    }
+};
+
+} // namespace
+
+TEST(Grid, CountsThatAreNotPowersOfTwo) {
+    const BoxRoomScene scene;
+    const ProbeGrid grid = ProbeGrid::spanning({-1.5, -1.0, 0.3}, {1.5, 1.0, 2.2}, {3, 2, 5});
+    const ProbeField field = scenes::analytic_field(scene, ProbePlacement::from_grid(grid), 128);
+    ASSERT_EQ(field.probe_count(), 30u);
+    std::mt19937 rng(17);
+    Tally grid_tally;
+    Tally nearest_tally;
+    FieldTraceSettings nearest;
+    nearest.mode = FieldMode::Nearest;
+    for (int i = 0; i < 3000; ++i) {
+        const Ray ray =
+            make_ray(scenes::random_point_in_room(scene, rng, 0.05), scenes::random_unit(rng));
+        const double exact = truth(scene, ray);
+        const FieldTraceResult g = field.trace(ray);
+        const FieldTraceResult n = field.trace(ray, nearest);
+        grid_tally.add(g, exact);
+        nearest_tally.add(n, exact);
+        if (g.status != TraceStatus::Unknown) {
+            ASSERT_GE(g.probe, 0);
+            ASSERT_LT(g.probe, 30);
+        } else {
+            EXPECT_EQ(g.probe, -1);
+        }
+    }
+    grid_tally.print("grid 3x2x5, grid walk");
+    nearest_tally.print("grid 3x2x5, 8 nearest");
+    EXPECT_EQ(grid_tally.counts[0], 0u); // a closed room: never a MISS
+    EXPECT_GT(grid_tally.rate(TraceStatus::Hit), 0.97);
+    // The maps' quantisation: a 128² texel spans about 1.6°, 5-7 cm at the far walls.
+    EXPECT_LT(grid_tally.percentile(0.5), 0.01);
+    EXPECT_LT(grid_tally.percentile(0.95), 0.07);
+}
+
+TEST(Grid, CameraOutsideTheGrid) {
+    const BoxRoomScene room = scenes::empty_box_room();
+    const ProbeGrid grid = ProbeGrid::spanning({-0.5, -0.4, 0.8}, {0.5, 0.4, 1.6}, {2, 2, 2});
+    const ProbeField field = scenes::analytic_field(room, ProbePlacement::from_grid(grid), 128);
+    std::mt19937 rng(23);
+    Tally through_box;
+    Tally beside_box;
+    for (int i = 0; i < 500; ++i) {
+        // From the far end of the room toward the grid, and along the walls beside it.
+        const glm::dvec3 eye(1.8, std::uniform_real_distribution<double>(-1.2, 1.2)(rng),
+                             std::uniform_real_distribution<double>(0.2, 2.3)(rng));
+        const glm::dvec3 target(std::uniform_real_distribution<double>(-0.4, 0.4)(rng),
+                                std::uniform_real_distribution<double>(-0.3, 0.3)(rng),
+                                std::uniform_real_distribution<double>(0.9, 1.5)(rng));
+        const Ray in = make_ray(eye, target - eye);
+        through_box.add(field.trace(in), truth(room, in));
+        const Ray beside =
+            make_ray(eye, glm::dvec3(-1.0, 0.0, 0.0) + 0.3 * scenes::random_unit(rng));
+        beside_box.add(field.trace(beside), truth(room, beside));
+    }
+    through_box.print("camera outside the grid, rays through it");
+    beside_box.print("camera outside the grid, any direction");
+    EXPECT_EQ(through_box.counts[static_cast<int>(TraceStatus::Hit)], through_box.rays);
+    EXPECT_GT(beside_box.rate(TraceStatus::Hit), 0.99);
+    EXPECT_LT(through_box.percentile(0.95), 0.06);
+    // A ray that never meets the grid's box is traced nearest-first.
+    const Ray away = make_ray({1.5, 1.0, 0.3}, {0.0, -1.0, 0.0});
+    const FieldTraceResult a = field.trace(away);
+    EXPECT_EQ(a.status, TraceStatus::Hit);
+    EXPECT_NEAR(a.t, 2.5, 0.01);
+    // From behind a wall: the probes saw its front, never a HIT through it.
+    EXPECT_EQ(field.trace(make_ray({2.3, 0.0, 1.2}, {-1.0, 0.02, 0.0})).status,
+              TraceStatus::Unknown);
+
+    // An object between the camera and the grid is not looked through: the sphere stands
+    // between a camera at x = 1.8 and probes at x <= -0.5, which see only its far side.
+    const BoxRoomScene scene;
+    const ProbeGrid behind = ProbeGrid::spanning({-1.5, -0.4, 0.6}, {-0.5, 0.4, 1.4}, {2, 2, 2});
+    const ProbeField hidden = scenes::analytic_field(scene, ProbePlacement::from_grid(behind), 128);
+    for (int i = 0; i < 100; ++i) {
+        const glm::dvec3 eye(1.8, 0.4, 1.0);
+        const glm::dvec3 on_sphere =
+            glm::dvec3(scene.sphere_centre) + 0.3 * scenes::random_unit(rng) * 0.5;
+        const Ray ray = make_ray(eye, on_sphere - eye);
+        const double exact = truth(scene, ray);
+        const FieldTraceResult r = hidden.trace(ray);
+        EXPECT_NE(r.status, TraceStatus::Miss);
+        if (r.status == TraceStatus::Hit) {
+            EXPECT_LT(r.t, exact + 0.05) << "looked through the sphere";
+        }
+    }
+}
+
+TEST(Grid, RaysThroughOtherProbesCentres) {
+    const BoxRoomScene room = scenes::empty_box_room();
+    const ProbeGrid grid = ProbeGrid::spanning({-1.0, -0.6, 0.6}, {1.0, 0.6, 1.8}, {2, 2, 2});
+    const ProbeField field = scenes::analytic_field(room, ProbePlacement::from_grid(grid), 128);
+    const std::vector<glm::dvec3> p = grid.positions();
+    Tally tally;
+    for (std::size_t a = 0; a < p.size(); ++a) {
+        for (std::size_t b = 0; b < p.size(); ++b) {
+            if (a == b) {
+                continue;
+            }
+            const glm::dvec3 d = glm::normalize(p[b] - p[a]);
+            // From probe a itself (one lookup), from a point before a, and from the middle.
+            for (const glm::dvec3& eye : {p[a], p[a] - 0.2 * d, 0.5 * (p[a] + p[b])}) {
+                const Ray ray = make_ray(eye, d);
+                const FieldTraceResult r = field.trace(ray);
+                tally.add(r, truth(room, ray));
+                EXPECT_EQ(r.status, TraceStatus::Hit);
+            }
+        }
+    }
+    tally.print("rays through probe centres");
+    EXPECT_LT(tally.percentile(0.95), 0.05);
+    EXPECT_LT(tally.percentile(1.0), 0.15); // diagonals end in the room's corners
+    // At a probe the answer is that probe's lookup.
+    const Ray at = make_ray(p[3], {0.3, -0.2, 0.9});
+    const FieldTraceResult r = field.trace(at);
+    EXPECT_EQ(r.probe, 3);
+    EXPECT_EQ(r.steps, 1u);
+}
+
+TEST(Grid, LinesAndSingleProbes) {
+    const BoxRoomScene room = scenes::empty_box_room();
+    std::mt19937 rng(31);
+    for (const std::array<int, 3> counts :
+         {std::array<int, 3>{4, 1, 1}, std::array<int, 3>{1, 3, 1}, std::array<int, 3>{1, 1, 1}}) {
+        const ProbeGrid grid = ProbeGrid::spanning({-1.2, -0.8, 1.0}, {1.2, 0.8, 1.4}, counts);
+        const ProbeField field = scenes::analytic_field(room, ProbePlacement::from_grid(grid), 96);
+        Tally tally;
+        for (int i = 0; i < 400; ++i) {
+            const Ray ray =
+                make_ray(scenes::random_point_in_room(room, rng, 0.1), scenes::random_unit(rng));
+            tally.add(field.trace(ray), truth(room, ray));
+        }
+        tally.print("line / single-probe grid");
+        EXPECT_EQ(tally.counts[0], 0u);
+        EXPECT_GT(tally.rate(TraceStatus::Hit), 0.99);
+    }
+}
+
+TEST(Grid, NearestCarriesTheProvenFreeDistanceToTheNextProbe) {
+    const BoxRoomScene room = scenes::empty_box_room();
+    const glm::dvec3 a(-0.5, 0.0, 1.2);
+    const glm::dvec3 b(0.5, 0.3, 1.2);
+    std::vector<ProbeMap> probes{scenes::analytic_probe(room, a, 128),
+                                 scenes::analytic_probe(room, b, 128)};
+    // Probe a knows nothing toward +x beyond 30° of the axis.
+    const int n = probes[0].resolution;
+    for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+            if (glm::dot(oct::texel_direction({x, y}, n), glm::vec3(1, 0, 0)) > 0.866f) {
+                probes[0].set_unknown(oct::texel_index({x, y}, n));
+            }
+        }
+    }
+    const ProbeField field(ProbePlacement::from_positions({a, b}), std::move(probes));
+    const Ray ray = make_ray({-0.45, 0.0, 1.1}, {1.0, 0.1, 0.05});
+    const FieldTraceResult only_a = [&] {
+        FieldTraceSettings s;
+        s.max_probes = 1;
+        return field.trace(ray, s);
+    }();
+    EXPECT_EQ(only_a.status, TraceStatus::Unknown);
+    EXPECT_EQ(only_a.probe, -1);
+    const FieldTraceResult r = field.trace(ray);
+    EXPECT_EQ(r.status, TraceStatus::Hit);
+    EXPECT_EQ(r.probe, 1);
+    EXPECT_EQ(r.probes_tried, 2u);
+    EXPECT_NEAR(r.t, truth(room, ray), 0.02);
+    // Probe b was asked from where probe a stopped, not from the start.
+    Ray from_free = ray;
+    from_free.t_min = only_a.free_until;
+    const ProbeTraceResult b_alone = field.trace_one(1, from_free);
+    EXPECT_EQ(b_alone.t, r.t);
+    EXPECT_EQ(r.steps, only_a.steps + b_alone.steps());
+}
+
+TEST(Grid, ProbeSetsLoadFromDiskAndModesAreChecked) {
+    const BoxRoomScene room;
+    const PointCloud cloud = room.cloud(0.05f, glm::dvec3(0.0, 0.0, 1.2));
+    const ProbeGrid grid = ProbeGrid::spanning({-0.6, -0.3, 1.0}, {0.6, 0.3, 1.4}, {2, 1, 1});
+    BakeSettings bake;
+    bake.resolution = 48;
+    const std::filesystem::path folder =
+        std::filesystem::temp_directory_path() /
+        ("lfprobe_field_test_" + std::to_string(std::random_device{}()));
+    const BakeSummary summary = bake_probe_set_from_cloud(
+        cloud, ProbePlacement::from_grid(grid), bake, {}, folder.string(), nlohmann::json::array());
+    ASSERT_EQ(summary.probe_count, 2u);
+    Progress progress;
+    const ProbeField field = ProbeField::load(folder.string(), &progress);
+    EXPECT_EQ(progress.fraction(), 1.0);
+    EXPECT_EQ(field.probe_count(), 2u);
+    EXPECT_TRUE(field.is_grid());
+    EXPECT_EQ(field.levels(0).levels().front().resolution, 24);
+    EXPECT_GT(field.memory_bytes(), 2u * 48u * 48u * 16u);
+    const Ray ray = make_ray({0.0, 0.0, 1.2}, {0.3, 1.0, -0.2});
+    const FieldTraceResult r = field.trace(ray);
+    EXPECT_EQ(r.status, TraceStatus::Hit);
+    EXPECT_NEAR(r.t, truth(room, ray), 0.1);
+    std::filesystem::remove_all(folder);
+
+    const ProbeField loose(ProbePlacement::from_positions({glm::dvec3(0.0, 0.0, 1.2)}),
+                           {scenes::analytic_probe(room, glm::dvec3(0.0, 0.0, 1.2), 16)});
+    FieldTraceSettings grid_mode;
+    grid_mode.mode = FieldMode::Grid;
+    EXPECT_THROW((void)loose.trace(ray, grid_mode), InputError);
+    EXPECT_EQ(loose.resolve_mode({}), FieldMode::Nearest);
+    EXPECT_EQ(field_mode_from_name("grid"), FieldMode::Grid);
+    EXPECT_THROW((void)field_mode_from_name("octree"), InputError);
+    EXPECT_THROW(ProbeField(ProbePlacement::from_grid(grid), {}), InputError);
+}
