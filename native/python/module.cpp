@@ -10,6 +10,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "bindings.hpp"
 #include "job.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/min_distance_pyramid.hpp"
@@ -478,6 +479,8 @@ PYBIND11_MODULE(_native, m) {
         py::arg("max_splat_radius_texels") = defaults.max_splat_radius_texels,
         py::arg("normal_neighbours") = geometry_defaults.normal_neighbours,
         py::arg("progress") = py::none(), "bake run to the end; see start_bake_probe_set.");
+
+    lfprobe::python::bind_render(m);
 
     m.def(
         "read_probe", [](const std::string& path) { return probe_dict(read_probe_exr(path)); },

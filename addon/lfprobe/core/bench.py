@@ -29,35 +29,56 @@ def _best_of(fn, repeats: int) -> float:
     return best
 
 
-def room_cloud(points: int, seed: int = 1):
-    """A 3 × 6 × 2.7 m room with tables and a column, sampled uniformly at random, with a
-    colour pattern: positions (n,3) float32 and linear colours (n,3) float32."""
-    rng = np.random.default_rng(seed)
-    lo = np.array([0.0, 0.0, 0.0])
-    hi = np.array([3.0, 6.0, 2.7])
-    # Axis-aligned boxes: the room (seen from inside) and furniture (seen from outside).
-    boxes = [(lo, hi), ((0.2, 0.5, 0.0), (1.0, 2.5, 0.75)), ((2.0, 3.5, 0.0), (2.8, 5.5, 0.75)),
-             ((1.4, 2.9, 0.0), (1.6, 3.1, 2.7))]
+# Axis-aligned boxes of the benchmark room: the room itself (seen from inside), two tables and
+# a column (seen from outside).
+ROOM_BOXES = [((0.0, 0.0, 0.0), (3.0, 6.0, 2.7)), ((0.2, 0.5, 0.0), (1.0, 2.5, 0.75)),
+              ((2.0, 3.5, 0.0), (2.8, 5.5, 0.75)), ((1.4, 2.9, 0.0), (1.6, 3.1, 2.7))]
+
+
+def room_faces():
+    """(axis, coordinate, box min, box max, area, outward sign) of every face; the room's own
+    faces face inward, the furniture's outward."""
     faces = []
-    for bmin, bmax in boxes:
+    for index, (bmin, bmax) in enumerate(ROOM_BOXES):
         bmin, bmax = np.asarray(bmin, float), np.asarray(bmax, float)
+        inward = -1.0 if index == 0 else 1.0
         for axis in range(3):
             u, v = (axis + 1) % 3, (axis + 2) % 3
             area = (bmax[u] - bmin[u]) * (bmax[v] - bmin[v])
-            for w in (bmin[axis], bmax[axis]):
-                faces.append((axis, w, bmin, bmax, area))
+            for w, side in ((bmin[axis], -1.0), (bmax[axis], 1.0)):
+                faces.append((axis, w, bmin, bmax, area, side * inward))
+    return faces
+
+
+def room_surface_area() -> float:
+    return float(sum(f[4] for f in room_faces()))
+
+
+def room_cloud(points: int, seed: int = 1, with_normals: bool = False):
+    """A 3 × 6 × 2.7 m room with tables and a column, sampled uniformly at random, with a
+    colour pattern: positions (n,3) float32 and linear colours (n,3) float32, and with
+    with_normals the true surface normals (n,3) float32 as a third value. (A single scanner
+    could not orient the normals of every face: each of these faces is seen from somewhere.)"""
+    rng = np.random.default_rng(seed)
+    faces = room_faces()
     areas = np.array([f[4] for f in faces])
     counts = rng.multinomial(points, areas / areas.sum())
     chunks = []
-    for (axis, w, bmin, bmax, _), count in zip(faces, counts):
+    normal_chunks = []
+    for (axis, w, bmin, bmax, _, sign), count in zip(faces, counts):
         p = rng.uniform(bmin, bmax, size=(count, 3))
         p[:, axis] = w
         chunks.append(p)
+        n = np.zeros((count, 3), np.float32)
+        n[:, axis] = sign
+        normal_chunks.append(n)
     positions = np.concatenate(chunks).astype(np.float32)
     stripes = 0.5 + 0.5 * np.sin(7.0 * positions[:, 0]) * np.cos(5.0 * positions[:, 1])
     colors = np.stack(
         [0.1 + 0.7 * stripes, 0.2 + 0.3 * (positions[:, 2] / 2.7), 0.4 - 0.2 * stripes], axis=1
     ).astype(np.float32)
+    if with_normals:
+        return positions, colors, np.concatenate(normal_chunks)
     return positions, colors
 
 
@@ -102,7 +123,8 @@ def bake_benchmark(points: int, resolution: int, tmp: str) -> dict:
     start = time.perf_counter()
     positions, colors = room_cloud(points)
     generate_seconds = time.perf_counter() - start
-    cloud = _native.PointCloud.from_arrays(positions, colors, scanners=[[1.5, 3.0, 1.4]])
+    # Normals estimated by PCA and oriented toward a scanner in the open middle of the room.
+    cloud = _native.PointCloud.from_arrays(positions, colors, scanners=[[1.5, 1.5, 1.4]])
     del positions, colors
     folder = os.path.join(tmp, "probes")
     probes = [[1.5, 1.5, 1.4], [1.5, 4.5, 1.4]]

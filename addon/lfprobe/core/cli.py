@@ -1,7 +1,8 @@
 """The lfprobe command line (bpy-free): ``./lfprobe SUBCOMMAND ...`` from the checkout.
 
-Subcommands: bake (scan files → probe set), info (what a probe set holds), bench (measured
-figures). Exit status: 0 success, 2 bad input, 1 other failure, 130 cancelled.
+Subcommands: bake (scan files → probe set), info (what a probe set holds), render (a view
+traced through the probes), splat (the raw cloud drawn as splats), camera (a camera file),
+bench (measured figures). Exit status: 0 success, 2 bad input, 1 other failure, 130 cancelled.
 """
 
 from __future__ import annotations
@@ -117,7 +118,59 @@ def _cmd_info(args) -> int:
     return 0 if not info["missing_files"] else 1
 
 
+def _cmd_render(args) -> int:
+    _native = native.load()
+    job = _native.start_render(args.probes, args.camera, args.out, mode=args.mode,
+                               threads=args.threads, thickness=args.thickness)
+    stats = job.run(None if args.quiet else TerminalProgress())
+    if args.json:
+        print(json.dumps(stats, indent=2))
+        return 0
+    rays = stats["rays"]
+    print(f"rendered {args.out}: {rays:,} rays in {stats['seconds'] * 1000:.1f} ms, "
+          f"{stats['rays_per_second'] / 1e6:.2f} M rays/s")
+    print(f"  HIT {100 * stats['hits'] / rays:.2f}%, MISS {100 * stats['misses'] / rays:.2f}%, "
+          f"UNKNOWN {100 * stats['unknown'] / rays:.2f}%; {stats['mean_steps']:.1f} texels and "
+          f"{stats['mean_probes']:.2f} probes per ray")
+    return 0
+
+
+def _cmd_splat(args) -> int:
+    from .pipeline import load_scans
+
+    _native = native.load()
+    progress = None if args.quiet else TerminalProgress()
+    cloud = load_scans(args.scan, _triples(args.scanner, "--scanner"), args.columns or "",
+                       "" if args.no_cache else args.cache, progress=progress)
+    job = _native.start_splat(cloud, args.camera, args.out, radius_scale=args.radius_scale,
+                              fixed_radius=args.fixed_radius, threads=args.threads)
+    stats = job.run(progress)
+    camera = json.load(open(args.camera, encoding="utf-8"))
+    pixels = camera["resolution"][0] * camera["resolution"][1]
+    stats["rays_per_second"] = pixels / stats["seconds"] if stats["seconds"] > 0 else 0.0
+    if args.json:
+        print(json.dumps(stats, indent=2))
+        return 0
+    print(f"splatted {stats['points']:,} points into {args.out} in {stats['seconds'] * 1000:.1f} ms "
+          f"({stats['points_per_second'] / 1e6:.1f} M points/s, {stats['rays_per_second'] / 1e6:.2f} M "
+          f"pixels/s); spacing estimate {stats['geometry_seconds']:.2f} s")
+    print(f"  covered {100 * stats['covered'] / pixels:.2f}% of {pixels:,} pixels")
+    return 0
+
+
+def _cmd_camera(args) -> int:
+    from .camera_json import camera_dict, write_camera
+
+    write_camera(args.out, camera_dict(args.position, args.look_at, args.res, args.lens, args.type))
+    print(f"wrote {args.out}")
+    return 0
+
+
 def _cmd_bench(args) -> int:
+    if args.suite == "render":
+        from . import bench_render
+
+        return bench_render.main(args)
     from . import bench
 
     return bench.main(args)
@@ -154,12 +207,51 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--probes", action="store_true", help="list every probe")
     info.set_defaults(run=_cmd_info)
 
+    render = sub.add_parser("render", help="render a view by tracing a probe set")
+    render.add_argument("--probes", required=True, metavar="DIR", help="probe set folder")
+    render.add_argument("--camera", required=True, metavar="CAM.json", help="camera file (DESIGN.md §3)")
+    render.add_argument("--out", required=True, metavar="IMG.exr")
+    render.add_argument("--mode", choices=["auto", "nearest", "grid"], default="auto",
+                        help="auto: grid walk for grid sets, else nearest probes first")
+    render.add_argument("--threads", type=int, default=0, help="cores to use (0: all); same image")
+    render.add_argument("--thickness", type=float, default=0.02, help="surface thickness (m)")
+    render.add_argument("--json", action="store_true", help="print the stats as JSON")
+    render.add_argument("--quiet", action="store_true")
+    render.set_defaults(run=_cmd_render)
+
+    splat = sub.add_parser("splat", help="render the raw cloud as z-buffered splats (baseline)")
+    splat.add_argument("--scan", nargs="+", required=True, metavar="FILE")
+    splat.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X")
+    splat.add_argument("--camera", required=True, metavar="CAM.json")
+    splat.add_argument("--out", required=True, metavar="IMG.exr")
+    splat.add_argument("--columns")
+    splat.add_argument("--cache", default=None, metavar="DIR")
+    splat.add_argument("--no-cache", action="store_true")
+    splat.add_argument("--radius-scale", type=float, default=0.8, help="splat half size / spacing")
+    splat.add_argument("--fixed-radius", type=float, default=0.0, help="splat half size in metres")
+    splat.add_argument("--threads", type=int, default=0)
+    splat.add_argument("--json", action="store_true")
+    splat.add_argument("--quiet", action="store_true")
+    splat.set_defaults(run=_cmd_splat)
+
+    camera = sub.add_parser("camera", help="write a camera file without Blender")
+    camera.add_argument("--position", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
+    camera.add_argument("--look-at", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
+    camera.add_argument("--res", nargs=2, type=int, default=[640, 480], metavar=("W", "H"))
+    camera.add_argument("--lens", type=float, default=35.0, help="focal length in mm (36 mm sensor)")
+    camera.add_argument("--type", choices=["PERSP", "PANO_EQUIRECT"], default="PERSP")
+    camera.add_argument("--out", required=True, metavar="CAM.json")
+    camera.set_defaults(run=_cmd_camera)
+
     bench = sub.add_parser("bench", help="benchmarks that print measured figures")
-    bench.add_argument("suite", choices=["core"], help="core: scan parsing and probe baking")
+    bench.add_argument("suite", choices=["core", "render"],
+                       help="core: scan parsing and probe baking; render: probe tracing vs splatting")
     bench.add_argument("--points", type=int, default=10_000_000, help="points in the bake benchmark")
     bench.add_argument("--res", type=int, default=2048, help="probe resolution in the bake benchmark")
     bench.add_argument("--parse-points", type=int, default=2_000_000,
                        help="points in the generated file for the parsing comparison")
+    bench.add_argument("--splat-points", default="1000000,10000000,30000000",
+                       help="render: cloud sizes for the splatting comparison")
     bench.add_argument("--json", metavar="FILE", help="also write the figures as JSON")
     bench.set_defaults(run=_cmd_bench)
     return parser

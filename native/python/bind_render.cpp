@@ -1,0 +1,257 @@
+// Bindings of the renderer: probe-traced views, the splat baseline, rendered images.
+#include <chrono>
+#include <cstring>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <pybind11/numpy.h>
+#include <pybind11/stl.h>
+#include <tbb/task_arena.h>
+
+#include "bindings.hpp"
+#include "job.hpp"
+#include "lfprobe/camera.hpp"
+#include "lfprobe/error.hpp"
+#include "lfprobe/image_exr.hpp"
+#include "lfprobe/local_geometry.hpp"
+#include "lfprobe/probe_field.hpp"
+#include "lfprobe/render.hpp"
+#include "lfprobe/splat_render.hpp"
+
+namespace py = pybind11;
+
+namespace lfprobe::python {
+
+namespace {
+
+// Runs `work` on `threads` cores (all when 0): the output does not depend on it, the time does.
+template <class F>
+auto on_threads(int threads, F&& work) {
+    if (threads <= 0) {
+        return work();
+    }
+    tbb::task_arena arena(threads);
+    return arena.execute(std::forward<F>(work));
+}
+
+Camera camera_from(const std::string& camera) {
+    // A path, or the JSON text itself (starts with '{').
+    const auto first = camera.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && camera[first] == '{') {
+        try {
+            return Camera::from_json(nlohmann::json::parse(camera), "camera JSON");
+        } catch (const nlohmann::json::exception& e) {
+            throw InputError(std::string("camera JSON: ") + e.what());
+        }
+    }
+    return read_camera_json(camera);
+}
+
+py::dict render_stats_dict(const RenderStats& s) {
+    py::dict d;
+    d["rays"] = s.rays;
+    d["hits"] = s.hits;
+    d["misses"] = s.misses;
+    d["unknown"] = s.unknown;
+    d["steps"] = s.steps;
+    d["probes_tried"] = s.probes_tried;
+    d["seconds"] = s.seconds;
+    d["rays_per_second"] = s.rays_per_second();
+    d["mean_steps"] = s.mean_steps();
+    d["mean_probes"] = s.mean_probes();
+    return d;
+}
+
+py::dict splat_stats_dict(const SplatStats& s, double geometry_seconds) {
+    py::dict d;
+    d["points"] = s.points;
+    d["drawn"] = s.drawn;
+    d["fragments"] = s.fragments;
+    d["covered"] = s.covered;
+    d["seconds"] = s.seconds;
+    d["points_per_second"] = s.points_per_second();
+    d["geometry_seconds"] = geometry_seconds;
+    return d;
+}
+
+RenderSettings render_settings(const std::string& mode, double thickness, bool use_coarse_levels,
+                               int tile_size) {
+    RenderSettings settings;
+    settings.trace.mode = field_mode_from_name(mode);
+    settings.trace.probe.thickness = thickness;
+    settings.trace.probe.use_coarse_levels = use_coarse_levels;
+    settings.tile_size = tile_size;
+    return settings;
+}
+
+py::dict image_dict(RenderedImage&& image, const std::string& metadata) {
+    const auto h = static_cast<py::ssize_t>(image.height);
+    const auto w = static_cast<py::ssize_t>(image.width);
+    auto copy = [](auto& v, std::vector<py::ssize_t> shape) {
+        using T = typename std::decay_t<decltype(v)>::value_type;
+        py::array_t<T> a(shape);
+        std::memcpy(a.mutable_data(), v.data(), v.size() * sizeof(T));
+        return a;
+    };
+    py::dict d;
+    d["width"] = image.width;
+    d["height"] = image.height;
+    d["rgba"] = copy(image.rgba, {h, w, 4});
+    d["depth"] = copy(image.depth, {h, w});
+    d["normal"] = copy(image.normal, {h, w, 3});
+    d["status"] = copy(image.status, {h, w});
+    d["probe"] = copy(image.probe, {h, w});
+    d["steps"] = copy(image.steps, {h, w});
+    d["metadata"] = metadata;
+    return d;
+}
+
+} // namespace
+
+void bind_render(py::module_& m) {
+    py::enum_<TraceStatus>(m, "TraceStatus")
+        .value("MISS", TraceStatus::Miss)
+        .value("HIT", TraceStatus::Hit)
+        .value("UNKNOWN", TraceStatus::Unknown);
+
+    py::class_<ProbeField, std::shared_ptr<ProbeField>>(
+        m, "ProbeField", "A loaded probe set: maps and coarse levels, ready to trace.")
+        .def_static(
+            "load",
+            [](const std::string& folder) {
+                py::gil_scoped_release release;
+                return std::make_shared<ProbeField>(ProbeField::load(folder));
+            },
+            py::arg("folder"))
+        .def_property_readonly("probe_count", &ProbeField::probe_count)
+        .def_property_readonly("is_grid", &ProbeField::is_grid)
+        .def_property_readonly("memory_bytes", &ProbeField::memory_bytes)
+        .def_property_readonly("world_offset",
+                               [](const ProbeField& f) {
+                                   const glm::dvec3 o = f.world_offset();
+                                   return py::make_tuple(o.x, o.y, o.z);
+                               })
+        .def(
+            "render",
+            [](std::shared_ptr<ProbeField> field, const std::string& camera,
+               const std::string& output, const std::string& mode, int threads, double thickness,
+               bool use_coarse_levels, int tile_size) {
+                const Camera cam = camera_from(camera);
+                const RenderSettings settings =
+                    render_settings(mode, thickness, use_coarse_levels, tile_size);
+                RenderStats stats;
+                RenderedImage image;
+                {
+                    py::gil_scoped_release release;
+                    image = on_threads(threads, [&] {
+                        return render_probe_view(*field, cam, settings, nullptr, &stats);
+                    });
+                    if (!output.empty()) {
+                        write_rendered_exr(
+                            output, image,
+                            nlohmann::json{{"camera", cam.to_json()},
+                                           {"settings", render_settings_json(settings)},
+                                           {"stats", stats.to_json()}}
+                                .dump());
+                    }
+                }
+                return py::make_tuple(image_dict(std::move(image), ""), render_stats_dict(stats));
+            },
+            py::arg("camera"), py::arg("output") = "", py::arg("mode") = "auto",
+            py::arg("threads") = 0, py::arg("thickness") = TraceSettings{}.thickness,
+            py::arg("use_coarse_levels") = true, py::arg("tile_size") = RenderSettings{}.tile_size,
+            "Trace a view (camera: a JSON path or text); returns (image dict, stats dict) and "
+            "writes the EXR when output is given. threads=0 uses every core.");
+
+    m.def(
+        "start_render",
+        [](const std::string& folder, const std::string& camera, const std::string& output,
+           const std::string& mode, int threads, double thickness, bool use_coarse_levels) {
+            const Camera cam = camera_from(camera);
+            const RenderSettings settings = render_settings(mode, thickness, use_coarse_levels, 32);
+            return std::make_unique<Job>(
+                std::function<RenderStats(Progress&)>([=](Progress& progress) {
+                    return on_threads(threads, [&] {
+                        progress.begin_stage("loading probes", 1);
+                        const ProbeField field = ProbeField::load(folder, &progress);
+                        RenderStats stats;
+                        const RenderedImage image =
+                            render_probe_view(field, cam, settings, &progress, &stats);
+                        write_rendered_exr(
+                            output, image,
+                            nlohmann::json{{"probes", folder},
+                                           {"camera", cam.to_json()},
+                                           {"settings", render_settings_json(settings)},
+                                           {"stats", stats.to_json()}}
+                                .dump());
+                        return stats;
+                    });
+                }),
+                std::function<py::object(RenderStats &&)>(
+                    [](RenderStats&& s) -> py::object { return render_stats_dict(s); }));
+        },
+        py::arg("folder"), py::arg("camera"), py::arg("output"), py::arg("mode") = "auto",
+        py::arg("threads") = 0, py::arg("thickness") = TraceSettings{}.thickness,
+        py::arg("use_coarse_levels") = true,
+        "Start rendering the probe set in `folder` from `camera` (JSON path or text) into the EXR "
+        "`output`; the Job's result is the stats dict.");
+
+    m.def(
+        "start_splat",
+        [](std::shared_ptr<PointCloud> cloud, const std::string& camera, const std::string& output,
+           double radius_scale, double fixed_radius, int threads) {
+            const Camera cam = camera_from(camera);
+            SplatSettings settings;
+            settings.radius_scale = radius_scale;
+            settings.fixed_radius = fixed_radius;
+            using Result = std::pair<SplatStats, double>;
+            auto work = [=](Progress& progress) {
+                return on_threads(threads, [&] {
+                    std::optional<LocalGeometry> geometry;
+                    double geometry_seconds = 0.0;
+                    if (settings.fixed_radius <= 0.0) {
+                        const auto start = std::chrono::steady_clock::now();
+                        geometry = estimate_local_geometry(*cloud, {}, &progress);
+                        geometry_seconds =
+                            std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+                                .count();
+                    }
+                    SplatStats stats;
+                    const RenderedImage image = render_splats(
+                        *cloud, geometry ? &*geometry : nullptr, cam, settings, &progress, &stats);
+                    write_rendered_exr(output, image,
+                                       nlohmann::json{{"camera", cam.to_json()},
+                                                      {"settings", splat_settings_json(settings)},
+                                                      {"stats", stats.to_json()}}
+                                           .dump());
+                    return Result{stats, geometry_seconds};
+                });
+            };
+            return std::make_unique<Job>(
+                std::function<Result(Progress&)>(work),
+                std::function<py::object(Result &&)>(
+                    [](Result&& r) -> py::object { return splat_stats_dict(r.first, r.second); }));
+        },
+        py::arg("cloud"), py::arg("camera"), py::arg("output"), py::arg("radius_scale") = 0.8,
+        py::arg("fixed_radius") = 0.0, py::arg("threads") = 0,
+        "Start drawing the cloud as z-buffered splats (sized by the local spacing, or "
+        "fixed_radius metres when > 0) into the EXR `output`; the Job's result is the stats.");
+
+    m.def(
+        "read_image",
+        [](const std::string& path) {
+            std::string metadata;
+            RenderedImage image;
+            {
+                py::gil_scoped_release release;
+                image = read_rendered_exr(path, &metadata);
+            }
+            return image_dict(std::move(image), metadata);
+        },
+        py::arg("path"),
+        "A rendered EXR as arrays (h, w[, c]): rgba, depth, normal, status, probe, steps; "
+        "metadata is the JSON text the renderer stored.");
+}
+
+} // namespace lfprobe::python

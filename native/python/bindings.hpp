@@ -1,0 +1,10 @@
+// The areas of the Python module, each bound in its own file.
+#pragma once
+
+#include <pybind11/pybind11.h>
+
+namespace lfprobe::python {
+
+void bind_render(pybind11::module_& m);
+
+} // namespace lfprobe::python
