@@ -1,0 +1,80 @@
+"""./lfprobe render, splat and camera end to end on a small generated room."""
+
+import json
+
+import numpy as np
+import pytest
+
+from conftest import run_cli
+
+
+@pytest.fixture(scope="module")
+def room(tmp_path_factory):
+    """A 4 × 3 × 2.5 m box room as an .xyz scan (2 cm pitch) and a 2×2×1 probe grid baked from it."""
+    folder = tmp_path_factory.mktemp("room")
+    lo, hi = np.array([-2.0, -1.5, 0.0]), np.array([2.0, 1.5, 2.5])
+    chunks = []
+    for axis in range(3):
+        u, v = (axis + 1) % 3, (axis + 2) % 3
+        uu, vv = np.meshgrid(np.arange(lo[u], hi[u], 0.02), np.arange(lo[v], hi[v], 0.02), indexing="ij")
+        for w in (lo[axis], hi[axis]):
+            p = np.zeros((uu.size, 3))
+            p[:, axis], p[:, u], p[:, v] = w, uu.ravel(), vv.ravel()
+            chunks.append(p)
+    p = np.concatenate(chunks)
+    rgb = np.column_stack([(p[:, 0] + 2) * 60, (p[:, 1] + 1.5) * 80, p[:, 2] * 100]).astype(int)
+    scan = folder / "room.xyz"
+    np.savetxt(scan, np.column_stack([p, rgb]), fmt=["%.4f"] * 3 + ["%d"] * 3)
+    probes = folder / "probes"
+    run_cli("bake", "--scan", scan, "--scanner", 0, 0, 1.25, "--grid-min", -1, -0.5, 1.2,
+            "--grid-max", 1, 0.5, 1.2, "--counts", 2, 2, 1, "--res", 128, "--out", probes,
+            "--no-cache", "--quiet", check=True)
+    camera = folder / "cam.json"
+    run_cli("camera", "--position", 0, 0, 1.25, "--look-at", 2, 0, 1.25, "--res", 64, 48,
+            "--lens", 20, "--out", camera, check=True)
+    return {"scan": scan, "probes": probes, "camera": camera, "folder": folder}
+
+
+def test_render_prints_speed_and_writes_the_view(native, room):
+    out = room["folder"] / "view.exr"
+    result = run_cli("render", "--probes", room["probes"], "--camera", room["camera"], "--out", out,
+                     "--quiet", check=True)
+    assert "M rays/s" in result.stdout and "texels" in result.stdout
+    image = native.read_image(str(out))
+    assert image["rgba"].shape == (48, 64, 4)
+    assert (image["status"] == 1).mean() > 0.99  # HIT
+    # The camera looks at the wall x = 2 from 2 m away, straight on at the centre.
+    assert image["depth"][24, 32] == pytest.approx(2.0, rel=0.01)
+    metadata = json.loads(image["metadata"])
+    assert metadata["stats"]["rays"] == 64 * 48
+
+
+def test_render_is_the_same_on_one_and_two_threads(native, room):
+    images = []
+    for threads in (1, 2):
+        out = room["folder"] / f"t{threads}.exr"
+        run_cli("render", "--probes", room["probes"], "--camera", room["camera"], "--out", out,
+                "--threads", threads, "--quiet", check=True)
+        images.append(native.read_image(str(out)))
+    for key in ("rgba", "depth", "normal", "status", "probe", "steps"):
+        assert np.array_equal(images[0][key], images[1][key], equal_nan=True), key
+
+
+def test_splat_baseline_renders_the_same_camera(native, room):
+    out = room["folder"] / "splat.exr"
+    result = run_cli("splat", "--scan", room["scan"], "--scanner", 0, 0, 1.25, "--camera",
+                     room["camera"], "--out", out, "--no-cache", "--quiet", check=True)
+    assert "M points/s" in result.stdout and "pixels/s" in result.stdout
+    image = native.read_image(str(out))
+    assert (image["status"] == 1).mean() > 0.99
+    assert image["depth"][24, 32] == pytest.approx(2.0, rel=0.02)
+
+
+def test_render_errors_are_clear(room, tmp_path):
+    bad = tmp_path / "bad_cam.json"
+    bad.write_text(json.dumps({"type": "ORTHO"}))
+    result = run_cli("render", "--probes", room["probes"], "--camera", bad, "--out", tmp_path / "x.exr")
+    assert result.returncode == 2 and "bad_cam.json" in result.stderr and "type" in result.stderr
+    assert not (tmp_path / "x.exr").exists()
+    missing = run_cli("render", "--probes", tmp_path, "--camera", room["camera"], "--out", tmp_path / "y.exr")
+    assert missing.returncode != 0 and "manifest" in missing.stderr
