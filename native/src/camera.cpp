@@ -439,4 +439,24 @@ Camera read_camera_json(const std::string& path) {
     return Camera::from_json(j, path);
 }
 
+Camera Camera::look_at(const glm::dvec3& eye, const glm::dvec3& target, int width, int height,
+                       double lens) {
+    const glm::dvec3 forward = glm::normalize(target - eye);
+    glm::dvec3 right = glm::cross(forward, glm::dvec3(0, 0, 1));
+    // Looking straight up or down: any horizontal right vector will do.
+    right = glm::length(right) > 1e-12 ? glm::normalize(right) : glm::dvec3(1, 0, 0);
+    const glm::dvec3 up = glm::cross(right, forward);
+    Camera c;
+    c.matrix_world = glm::dmat4(1.0);
+    c.matrix_world[0] = glm::dvec4(right, 0.0);
+    c.matrix_world[1] = glm::dvec4(up, 0.0);
+    c.matrix_world[2] = glm::dvec4(-forward, 0.0);
+    c.matrix_world[3] = glm::dvec4(eye, 1.0);
+    c.width = width;
+    c.height = height;
+    c.lens = lens;
+    c.clip_start = 0.01;
+    return c;
+}
+
 } // namespace lfprobe

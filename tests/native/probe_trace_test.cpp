@@ -17,20 +17,11 @@
 using namespace lfprobe;
 using lfprobe::testing::BoxRoomScene;
 namespace scenes = lfprobe::testing;
+using lfprobe::testing::probe_ray;
 
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-Ray probe_ray(const glm::dvec3& origin_rel, const glm::dvec3& dir, double t_min = 0.0,
-              double t_max = kInf) {
-    Ray ray;
-    ray.origin = origin_rel;
-    ray.direction = glm::normalize(dir);
-    ray.t_min = t_min;
-    ray.t_max = t_max;
-    return ray;
-}
 
 // The exact distance along a ray given in the probe's frame.
 double true_depth(const BoxRoomScene& scene, const glm::dvec3& centre, const Ray& ray) {

@@ -26,24 +26,6 @@ namespace scenes = lfprobe::testing;
 
 namespace {
 
-// A perspective camera at `eye` looking at `target` with +Z up (Blender's convention).
-Camera look_at(const glm::dvec3& eye, const glm::dvec3& target, int w, int h, double lens) {
-    const glm::dvec3 forward = glm::normalize(target - eye);
-    const glm::dvec3 right = glm::normalize(glm::cross(forward, glm::dvec3(0, 0, 1)));
-    const glm::dvec3 up = glm::cross(right, forward);
-    Camera c;
-    c.matrix_world = glm::dmat4(1.0);
-    c.matrix_world[0] = glm::dvec4(right, 0.0);
-    c.matrix_world[1] = glm::dvec4(up, 0.0);
-    c.matrix_world[2] = glm::dvec4(-forward, 0.0);
-    c.matrix_world[3] = glm::dvec4(eye, 1.0);
-    c.width = w;
-    c.height = h;
-    c.lens = lens;
-    c.clip_start = 0.01;
-    return c;
-}
-
 // Probes baked from a dense cloud of the box room: 2×2×2 probes at 256², built once.
 const ProbeField& baked_box_room() {
     static const ProbeField field = [] {
@@ -138,14 +120,15 @@ TEST(Render, BakedBoxRoomAtBetweenAndOutsideTheProbes) {
     // Bounds from measured figures with margin. Behind the sphere the probes cannot see what
     // the camera sees (its near side and the floor in its shadow): holes there are right.
     const std::vector<View> views{
-        {"at a probe", look_at(field.probe(0).position, sphere, 160, 120, 20.0), 0.005, 0.01, 0.02},
+        {"at a probe", Camera::look_at(field.probe(0).position, sphere, 160, 120, 20.0), 0.005,
+         0.01, 0.02},
         {"between probes",
-         look_at({-0.2, 0.0, 1.2}, sphere + glm::dvec3(0.3, 0.6, 0.0), 160, 120, 20.0), 0.01, 0.005,
-         0.015},
-        {"outside the grid", look_at({1.7, -1.2, 2.0}, {-1.0, 0.5, 0.8}, 160, 120, 20.0), 0.08,
-         0.01, 0.05},
-        {"outside, behind the sphere", look_at({1.8, 1.3, 0.5}, {-1.5, -1.0, 1.5}, 160, 120, 20.0),
-         0.4, 0.01, 0.06},
+         Camera::look_at({-0.2, 0.0, 1.2}, sphere + glm::dvec3(0.3, 0.6, 0.0), 160, 120, 20.0),
+         0.01, 0.005, 0.015},
+        {"outside the grid", Camera::look_at({1.7, -1.2, 2.0}, {-1.0, 0.5, 0.8}, 160, 120, 20.0),
+         0.08, 0.01, 0.05},
+        {"outside, behind the sphere",
+         Camera::look_at({1.8, 1.3, 0.5}, {-1.5, -1.0, 1.5}, 160, 120, 20.0), 0.4, 0.01, 0.06},
     };
     for (const View& v : views) {
         RenderStats stats;
@@ -168,7 +151,7 @@ TEST(Render, BitIdenticalForOneAndTwoThreads) {
     const BoxRoomScene scene;
     const ProbeGrid grid = ProbeGrid::spanning({-1.0, -0.6, 0.7}, {1.0, 0.6, 1.7}, {3, 2, 2});
     const ProbeField field = scenes::analytic_field(scene, ProbePlacement::from_grid(grid), 64);
-    const Camera camera = look_at({1.6, -1.1, 1.9}, {-0.5, 0.3, 0.9}, 96, 64, 18.0);
+    const Camera camera = Camera::look_at({1.6, -1.1, 1.9}, {-0.5, 0.3, 0.9}, 96, 64, 18.0);
     RenderSettings settings;
     settings.tile_size = 8;
     RenderedImage one;
@@ -188,13 +171,13 @@ TEST(Render, ExrRoundTripIsExactAndAtomic) {
     const BoxRoomScene scene = scenes::empty_box_room();
     const ProbeGrid grid = ProbeGrid::spanning({-0.5, -0.5, 1.0}, {0.5, 0.5, 1.0}, {2, 2, 1});
     const ProbeField field = scenes::analytic_field(scene, ProbePlacement::from_grid(grid), 48);
-    Camera camera = look_at({2.5, 0.0, 1.2}, {0.0, 0.0, 1.2}, 40, 30, 25.0);
+    Camera camera = Camera::look_at({2.5, 0.0, 1.2}, {0.0, 0.0, 1.2}, 40, 30, 25.0);
     RenderStats stats;
     const RenderedImage image = render_probe_view(field, camera, {}, nullptr, &stats);
     // The camera stands outside the room: every ray starts behind the wall x = 2.
     EXPECT_EQ(stats.unknown, stats.rays);
 
-    camera = look_at({1.5, 0.0, 1.2}, {0.0, 0.0, 1.2}, 40, 30, 25.0);
+    camera = Camera::look_at({1.5, 0.0, 1.2}, {0.0, 0.0, 1.2}, 40, 30, 25.0);
     RenderedImage inside = render_probe_view(field, camera, {}, nullptr, &stats);
     EXPECT_EQ(stats.hits, stats.rays);
     const std::filesystem::path folder =
@@ -223,7 +206,7 @@ TEST(Render, ProgressCountsPixelsAndCancellationStops) {
     const BoxRoomScene scene;
     const ProbeField field = scenes::analytic_field(
         scene, ProbePlacement::from_positions({glm::dvec3(0.0, 0.0, 1.2)}), 32);
-    const Camera camera = look_at({0.5, 0.1, 1.0}, {-1.0, 0.0, 1.2}, 50, 40, 30.0);
+    const Camera camera = Camera::look_at({0.5, 0.1, 1.0}, {-1.0, 0.0, 1.2}, 50, 40, 30.0);
     Progress progress;
     RenderSettings settings;
     settings.tile_size = 7;
@@ -238,7 +221,7 @@ TEST(Render, ProgressCountsPixelsAndCancellationStops) {
 
 TEST(Render, CoarseLevelsChangeNothingButTheStepCount) {
     const ProbeField& field = baked_box_room();
-    const Camera camera = look_at({1.7, -1.2, 2.0}, {-1.0, 0.5, 0.8}, 120, 90, 20.0);
+    const Camera camera = Camera::look_at({1.7, -1.2, 2.0}, {-1.0, 0.5, 0.8}, 120, 90, 20.0);
     RenderSettings with;
     RenderSettings without;
     without.trace.probe.use_coarse_levels = false;
@@ -269,7 +252,7 @@ TEST(Render, FromAProbeSetFolderAndACameraFileToAnExr) {
                                         {-0.5, 0.0, 1.2}, {0.5, 0.0, 1.2}, {2, 1, 1})),
                                     bake, {}, (folder / "probes").string(),
                                     nlohmann::json::array());
-    const Camera camera = look_at({0.0, -1.0, 1.3}, {0.0, 1.0, 1.0}, 24, 16, 20.0);
+    const Camera camera = Camera::look_at({0.0, -1.0, 1.3}, {0.0, 1.0, 1.0}, 24, 16, 20.0);
     const std::string camera_path = (folder / "camera.json").string();
     write_file_atomically(camera_path, camera.to_json().dump());
     const std::string out = (folder / "view.exr").string();

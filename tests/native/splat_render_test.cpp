@@ -23,23 +23,6 @@ using lfprobe::testing::BoxRoomScene;
 
 namespace {
 
-Camera looking(const glm::dvec3& eye, const glm::dvec3& target, int w, int h) {
-    const glm::dvec3 forward = glm::normalize(target - eye);
-    const glm::dvec3 right = glm::normalize(glm::cross(forward, glm::dvec3(0, 0, 1)));
-    const glm::dvec3 up = glm::cross(right, forward);
-    Camera c;
-    c.matrix_world = glm::dmat4(1.0);
-    c.matrix_world[0] = glm::dvec4(right, 0.0);
-    c.matrix_world[1] = glm::dvec4(up, 0.0);
-    c.matrix_world[2] = glm::dvec4(-forward, 0.0);
-    c.matrix_world[3] = glm::dvec4(eye, 1.0);
-    c.width = w;
-    c.height = h;
-    c.lens = 20.0;
-    c.clip_start = 0.01;
-    return c;
-}
-
 PointCloud two_points(const glm::vec3& a, const glm::vec3& b) {
     PointCloud cloud;
     cloud.positions = {a, b};
@@ -51,7 +34,7 @@ PointCloud two_points(const glm::vec3& a, const glm::vec3& b) {
 } // namespace
 
 TEST(Splat, NearestPointWinsWhateverTheOrder) {
-    const Camera camera = looking({0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, 33, 33);
+    const Camera camera = Camera::look_at({0.0, 0.0, 0.0}, {0.0, 1.0, 0.0}, 33, 33, 20.0);
     SplatSettings settings;
     settings.fixed_radius = 0.05;
     // Both on the central pixel's ray; the nearer is green.
@@ -89,8 +72,8 @@ TEST(Splat, BoxRoomDepthsMatchTheScene) {
     const PointCloud cloud = scene.cloud(0.02f, glm::dvec3(0.0, 0.0, 1.2));
     const LocalGeometry geometry = estimate_local_geometry(cloud, {});
     for (const Camera& camera :
-         {looking({-1.2, -0.8, 1.4}, glm::dvec3(scene.sphere_centre), 160, 120), [] {
-              Camera pano = looking({0.0, 0.0, 1.2}, {1.0, 0.0, 1.2}, 256, 128);
+         {Camera::look_at({-1.2, -0.8, 1.4}, glm::dvec3(scene.sphere_centre), 160, 120, 20.0), [] {
+              Camera pano = Camera::look_at({0.0, 0.0, 1.2}, {1.0, 0.0, 1.2}, 256, 128, 20.0);
               pano.type = CameraType::PanoramaEquirect;
               return pano;
           }()}) {
@@ -134,7 +117,7 @@ TEST(Splat, BitIdenticalForOneAndTwoThreads) {
     const BoxRoomScene scene;
     const PointCloud cloud = scene.cloud(0.04f, glm::dvec3(0.0, 0.0, 1.2));
     const LocalGeometry geometry = estimate_local_geometry(cloud, {});
-    const Camera camera = looking({1.5, -1.0, 2.0}, {-1.0, 0.5, 0.5}, 120, 80);
+    const Camera camera = Camera::look_at({1.5, -1.0, 2.0}, {-1.0, 0.5, 0.5}, 120, 80, 20.0);
     RenderedImage one;
     RenderedImage two;
     tbb::task_arena(1).execute([&] { one = render_splats(cloud, &geometry, camera); });
@@ -165,8 +148,9 @@ TEST(Splat, CameraFileToExr) {
         ("lfprobe_splat_test_" + std::to_string(std::random_device{}()));
     std::filesystem::create_directories(folder);
     const std::string camera_path = (folder / "camera.json").string();
-    write_file_atomically(camera_path,
-                          looking({0.0, 0.0, 1.2}, {1.0, 0.2, 1.0}, 32, 24).to_json().dump());
+    write_file_atomically(
+        camera_path,
+        Camera::look_at({0.0, 0.0, 1.2}, {1.0, 0.2, 1.0}, 32, 24, 20.0).to_json().dump());
     SplatSettings fixed;
     fixed.fixed_radius = 0.05;
     const SplatStats stats =

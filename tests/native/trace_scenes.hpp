@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <functional>
 #include <limits>
+
+#include "lfprobe/ray.hpp"
 #include <random>
 
 #include <glm/geometric.hpp>
@@ -132,6 +134,17 @@ custom_probe(int n, const glm::dvec3& centre,
             return p;
         }
     }
+}
+
+// A ray in a probe's frame: origin relative to the probe centre, direction normalised.
+inline Ray probe_ray(const glm::dvec3& origin_rel, const glm::dvec3& dir, double t_min = 0.0,
+                     double t_max = std::numeric_limits<double>::infinity()) {
+    Ray ray;
+    ray.origin = origin_rel;
+    ray.direction = glm::normalize(dir);
+    ray.t_min = t_min;
+    ray.t_max = t_max;
+    return ray;
 }
 
 } // namespace lfprobe::testing

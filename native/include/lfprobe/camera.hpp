@@ -51,6 +51,10 @@ struct Camera {
     // Reads the JSON of DESIGN.md §3; `where` names the source in errors. Omitted keys keep
     // Blender's defaults. Throws InputError naming `where` and the offending key.
     [[nodiscard]] static Camera from_json(const nlohmann::json& j, const std::string& where);
+    // A perspective camera at `eye` looking at `target`, world +Z up (as a Blender camera
+    // aimed with a Track To constraint), clip_start 0.01 m; the other fields keep defaults.
+    [[nodiscard]] static Camera look_at(const glm::dvec3& eye, const glm::dvec3& target, int width,
+                                        int height, double lens = 50.0);
     [[nodiscard]] nlohmann::json to_json() const;
 
     // Camera position in world coordinates.
