@@ -38,76 +38,85 @@ def _best_render(field, camera_text, threads, repeats=3):
     return best
 
 
+def _bake(_native, n, res, folder):
+    positions, colors, normals = room_cloud(n, with_normals=True)
+    cloud = _native.PointCloud.from_arrays(positions, colors, normals)
+    del positions, colors, normals
+    start = time.perf_counter()
+    _native.bake_probe_set(cloud, folder, resolution=res, grid_min=PROBES["min"],
+                           grid_max=PROBES["max"], counts=PROBES["counts"])
+    return cloud, time.perf_counter() - start
+
+
 def main(args) -> int:
     _native = native.load()
     tmp = tempfile.mkdtemp(prefix="lfprobe-bench-render-")
-    results = {"cpu_count": os.cpu_count(), "trace": [], "splat": []}
+    results = {"cpu_count": os.cpu_count(), "trace": [], "sizes": []}
     try:
-        sizes = [int(float(s)) for s in args.splat_points.split(",") if s.strip()]
-        smallest = min(sizes)
-        print(f"== probes: {PROBES['counts']} grid at {args.res}², baked from {smallest:,} points ==")
-        positions, colors, normals = room_cloud(smallest, with_normals=True)
-        cloud = _native.PointCloud.from_arrays(positions, colors, normals)
-        folder = os.path.join(tmp, "probes")
-        start = time.perf_counter()
-        _native.bake_probe_set(cloud, folder, resolution=args.res, grid_min=PROBES["min"],
-                               grid_max=PROBES["max"], counts=PROBES["counts"])
-        print(f"  baked in {time.perf_counter() - start:.1f} s")
-        field = _native.ProbeField.load(folder)
+        sizes = sorted(int(float(s)) for s in args.splat_points.split(",") if s.strip())
         views = _views()
-        print("\n== probe tracing (grid walk), best of 3 ==")
-        for name, camera in views.items():
-            text = json.dumps(camera)
-            one = _best_render(field, text, 1)
-            two = _best_render(field, text, 2)
-            row = {
-                "view": name,
-                "rays": one["rays"],
-                "rays_per_second_1_thread": one["rays_per_second"],
-                "rays_per_second_2_threads": two["rays_per_second"],
-                "ms_per_frame_2_threads": 1000 * two["seconds"],
-                "texels_per_ray": two["mean_steps"],
-                "probes_per_ray": two["mean_probes"],
-                "hit_rate": two["hits"] / two["rays"],
-                "unknown_rate": two["unknown"] / two["rays"],
-            }
-            results["trace"].append(row)
-            print(
-                f"{name}: {row['rays']:,} rays; {row['rays_per_second_1_thread'] / 1e6:.2f} M rays/s on "
-                f"1 thread, {row['rays_per_second_2_threads'] / 1e6:.2f} M on 2 "
-                f"({row['ms_per_frame_2_threads']:.1f} ms/frame); {row['texels_per_ray']:.1f} texels and "
-                f"{row['probes_per_ray']:.2f} probes per ray; HIT {100 * row['hit_rate']:.1f}%, "
-                f"UNKNOWN {100 * row['unknown_rate']:.1f}%"
-            )
-        del cloud
-
-        print("\n== splatting the raw cloud, same view ('between probes'), 2 threads ==")
-        camera_text = json.dumps(views["between probes"])
-        trace_ms = next(r for r in results["trace"] if r["view"] == "between probes")["ms_per_frame_2_threads"]
         for n in sizes:
-            positions, colors = room_cloud(n)
-            cloud = _native.PointCloud.from_arrays(positions, colors)
-            del positions, colors
+            print(f"== {n:,} points: probes {PROBES['counts']} grid at {args.res}² baked from them ==")
+            folder = os.path.join(tmp, f"probes_{n}")
+            cloud, bake_seconds = _bake(_native, n, args.res, folder)
+            print(f"  bake (normals, spacing, {PROBES['counts'][0] * PROBES['counts'][1] * PROBES['counts'][2]} probes): {bake_seconds:.1f} s")
+            field = _native.ProbeField.load(folder)
+            if n == sizes[0]:
+                print("  probe tracing (grid walk), best of 3:")
+                for name, camera in views.items():
+                    text = json.dumps(camera)
+                    one = _best_render(field, text, 1)
+                    two = _best_render(field, text, 2)
+                    row = {
+                        "view": name,
+                        "rays": one["rays"],
+                        "rays_per_second_1_thread": one["rays_per_second"],
+                        "rays_per_second_2_threads": two["rays_per_second"],
+                        "ms_per_frame_2_threads": 1000 * two["seconds"],
+                        "texels_per_ray": two["mean_steps"],
+                        "probes_per_ray": two["mean_probes"],
+                        "hit_rate": two["hits"] / two["rays"],
+                        "unknown_rate": two["unknown"] / two["rays"],
+                    }
+                    results["trace"].append(row)
+                    print(
+                        f"  {name}: {row['rays']:,} rays; {row['rays_per_second_1_thread'] / 1e6:.2f} M "
+                        f"rays/s on 1 thread, {row['rays_per_second_2_threads'] / 1e6:.2f} M on 2 "
+                        f"({row['ms_per_frame_2_threads']:.1f} ms/frame); {row['texels_per_ray']:.1f} "
+                        f"texels and {row['probes_per_ray']:.2f} probes per ray; HIT "
+                        f"{100 * row['hit_rate']:.1f}%, UNKNOWN {100 * row['unknown_rate']:.1f}%"
+                    )
+            text = json.dumps(views["between probes"])
+            trace = _best_render(field, text, 2)
+            del field
             # The spacing of uniform samples: one point per spacing² of surface.
             radius = 0.8 * math.sqrt(room_surface_area() / n)
             best = None
             for _ in range(2):
-                job = _native.start_splat(cloud, camera_text, os.path.join(tmp, "splat.exr"),
+                job = _native.start_splat(cloud, text, os.path.join(tmp, "splat.exr"),
                                           fixed_radius=radius, threads=2)
                 stats = job.run()
                 if best is None or stats["seconds"] < best["seconds"]:
                     best = stats
             del cloud
-            row = {"points": n, "ms_per_frame": 1000 * best["seconds"],
-                   "points_per_second": best["points_per_second"],
-                   "coverage": best["covered"] / (480 * 360),
-                   "probe_trace_ms_per_frame": trace_ms,
-                   "splat_over_trace": 1000 * best["seconds"] / trace_ms}
-            results["splat"].append(row)
-            print(f"{n:>12,} points: splat {row['ms_per_frame']:.1f} ms/frame "
-                  f"({row['points_per_second'] / 1e6:.1f} M points/s, covers {100 * row['coverage']:.1f}%), "
-                  f"probe trace {trace_ms:.1f} ms/frame: splat/trace = {row['splat_over_trace']:.2f}")
-        print("\nEmbree's primary-ray throughput on the reference mesh: not measured yet (the ground "
+            shutil.rmtree(folder, ignore_errors=True)
+            row = {"points": n, "bake_seconds": bake_seconds,
+                   "trace_ms_per_frame": 1000 * trace["seconds"],
+                   "trace_rays_per_second": trace["rays_per_second"],
+                   "trace_texels_per_ray": trace["mean_steps"],
+                   "splat_ms_per_frame": 1000 * best["seconds"],
+                   "splat_points_per_second": best["points_per_second"],
+                   "splat_coverage": best["covered"] / (480 * 360)}
+            row["splat_over_trace"] = row["splat_ms_per_frame"] / row["trace_ms_per_frame"]
+            results["sizes"].append(row)
+            print(f"  view 'between probes', 2 threads: probe trace {row['trace_ms_per_frame']:.1f} ms "
+                  f"({row['trace_texels_per_ray']:.1f} texels/ray); splatting the cloud "
+                  f"{row['splat_ms_per_frame']:.1f} ms ({row['splat_points_per_second'] / 1e6:.1f} M "
+                  f"points/s): splat/trace = {row['splat_over_trace']:.2f}\n")
+        print("summary: points, probe trace ms/frame, splat ms/frame")
+        for row in results["sizes"]:
+            print(f"  {row['points']:>12,}  {row['trace_ms_per_frame']:8.1f}  {row['splat_ms_per_frame']:8.1f}")
+        print("Embree's primary-ray throughput on the reference mesh: not measured yet (the ground "
               "truth renderer arrives with the ground-truth issue).")
         if args.json:
             with open(args.json, "w", encoding="utf-8") as out:
