@@ -21,4 +21,10 @@ ASAN_OPTIONS="detect_leaks=1:abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1
   ./build-asan/lfprobe_tests --gtest_brief=1
 
 echo "== Python tests (no Blender) =="
-PYTHONPATH="$root/addon" /usr/bin/python3 -m pytest -q tests/python
+# Independent implementations the metrics are checked against, kept out of the system Python.
+pydeps="$root/build/pydeps"
+if ! PYTHONPATH="$pydeps" /usr/bin/python3 -c "import flip_evaluator" 2>/dev/null; then
+  /usr/bin/python3 -m pip install -q --disable-pip-version-check --no-deps --target "$pydeps" \
+    "flip-evaluator==1.7"
+fi
+PYTHONPATH="$root/addon:$pydeps" /usr/bin/python3 -m pytest -q tests/python

@@ -6,5 +6,6 @@
 namespace lfprobe::python {
 
 void bind_render(pybind11::module_& m);
+void bind_mesh(pybind11::module_& m); // meshes, Embree ground truth, mesh bakes, simulated scans
 
 } // namespace lfprobe::python
