@@ -2,7 +2,7 @@
 
 Subcommands: bake (scan files → probe set), info (what a probe set holds), render (a view
 traced through the probes), splat (the raw cloud drawn as splats), camera (a camera file),
-bench (measured figures). Exit status: 0 success, 2 bad input, 1 other failure, 130 cancelled.
+compare (metrics of a view against ground truth), bench (measured figures). Exit status: 0 success, 2 bad input, 1 other failure, 130 cancelled.
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ import json
 import sys
 from typing import List, Optional, Sequence
 
-from . import native
+from . import cli_compare, native
 from .pipeline import BakeOptions, ProbePlacementSpec, bake_from_scans
 from .probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
 from .progress import TerminalProgress
@@ -242,6 +242,8 @@ def build_parser() -> argparse.ArgumentParser:
     camera.add_argument("--type", choices=["PERSP", "PANO_EQUIRECT"], default="PERSP")
     camera.add_argument("--out", required=True, metavar="CAM.json")
     camera.set_defaults(run=_cmd_camera)
+
+    cli_compare.add_parsers(sub)
 
     bench = sub.add_parser("bench", help="benchmarks that print measured figures")
     bench.add_argument("suite", choices=["core", "render"],

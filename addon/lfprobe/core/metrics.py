@@ -1,0 +1,222 @@
+"""Image metrics for comparing a rendered view with ground truth (DESIGN.md §4 "Metrics").
+
+Pure numpy (no bpy, no scipy). Every figure is defined in the docstring of the function that
+computes it, and `DEFINITIONS` repeats the definitions that `compare --json` prints.
+
+Colour metrics work on sRGB-encoded colour: the linear RGB of the EXR is clamped to [0, 1] and
+passed through the sRGB curve (`srgb_encode`), so the data range is 1.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Dict, Optional, Tuple
+
+import numpy as np
+
+from . import flip as _flip
+
+STATUS_MISS, STATUS_HIT, STATUS_UNKNOWN = 0, 1, 2
+
+SSIM_SIGMA = 1.5
+SSIM_WINDOW = 11  # 2·int(3.5·σ + 0.5) + 1: the Gaussian truncated at 3.5σ, as scikit-image does
+SSIM_K1, SSIM_K2 = 0.01, 0.03
+
+DEFINITIONS = {
+    "colour": "RGB of each image with every pixel whose status is not HIT set to black, clamped to "
+              "[0,1] and sRGB-encoded; data range 1",
+    "psnr": "10·log10(1/MSE) over all pixels and the three channels of the sRGB colour, in dB; "
+            "infinite when the images are identical (null in compare --json)",
+    "ssim": "SSIM per channel (11×11 Gaussian window σ=1.5, K1=0.01, K2=0.03, population "
+            "covariances), averaged over the valid region (5-pixel border dropped), then over channels",
+    "flip": "mean LDR-FLIP error (Andersson et al. 2020) of the sRGB colour at the given pixels per degree",
+    "depth_absrel": "mean of |d_test − d_ref| / d_ref over pixels that both images hit with finite "
+                    "positive depth; null when there are none",
+    "depth_rmse": "sqrt(mean((d_test − d_ref)²)) over the same pixels, in scene units; null when none",
+    "hole_rate": "pixels the ground truth hits but the test does not (test MISS or UNKNOWN) / pixels "
+                 "the ground truth hits; 0 when it hits none",
+    "false_hit_rate": "pixels the test calls HIT where the ground truth misses / pixels the ground "
+                      "truth misses; 0 when it misses none",
+    "false_miss_rate": "pixels the test calls MISS where the ground truth hits / pixels the ground "
+                       "truth hits; 0 when it hits none (a subset of the holes)",
+    "unknown_rate": "pixels the test calls UNKNOWN / all pixels",
+    "counts": "confusion counts: ground truth (hit, miss) × test (HIT, MISS, UNKNOWN); reference "
+              "pixels that are themselves UNKNOWN are left out and counted in ref_unknown",
+}
+
+
+def srgb_encode(linear: np.ndarray) -> np.ndarray:
+    """Linear colour → sRGB-encoded colour in [0, 1]: clamp to [0, 1] (NaN → 0), then the sRGB
+    curve 12.92·c below 0.0031308 and 1.055·c^(1/2.4) − 0.055 above."""
+    c = np.clip(np.nan_to_num(np.asarray(linear, dtype=np.float64), nan=0.0), 0.0, 1.0)
+    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
+
+
+def _check_pair(ref: np.ndarray, test: np.ndarray) -> None:
+    if ref.shape != test.shape:
+        raise ValueError(f"images differ in size: {ref.shape} vs {test.shape}")
+
+
+def psnr(ref_rgb: np.ndarray, test_rgb: np.ndarray) -> float:
+    """PSNR in dB of two linear RGB images, on sRGB-encoded clamped colour with data range 1:
+    10·log10(1 / MSE), MSE over all pixels and channels; +inf when the encoded images are equal."""
+    ref, test = srgb_encode(ref_rgb), srgb_encode(test_rgb)
+    _check_pair(ref, test)
+    mse = float(np.mean((ref - test) ** 2))
+    return math.inf if mse == 0.0 else 10.0 * math.log10(1.0 / mse)
+
+
+def _gaussian_window_1d() -> np.ndarray:
+    radius = SSIM_WINDOW // 2
+    x = np.arange(-radius, radius + 1, dtype=np.float64)
+    g = np.exp(-0.5 * (x / SSIM_SIGMA) ** 2)
+    return g / g.sum()
+
+
+def _valid_filter(image: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Separable correlation of (h, w, ...) with weights on both axes, valid region only
+    (output shrinks by len(weights) − 1 on each axis)."""
+    n = len(weights)
+    h, w = image.shape[0] - n + 1, image.shape[1] - n + 1
+    rows = sum(weights[k] * image[k : k + h] for k in range(n))
+    return sum(weights[k] * rows[:, k : k + w] for k in range(n))
+
+
+def ssim_map(ref_srgb: np.ndarray, test_srgb: np.ndarray) -> np.ndarray:
+    """The SSIM map (h − 10, w − 10, c) of two images already in the [0, 1] range (no encoding).
+
+    SSIM = ((2·μx·μy + C1)(2·σxy + C2)) / ((μx² + μy² + C1)(σx² + σy² + C2)), C1 = (0.01)²,
+    C2 = (0.03)², local means and population (co)variances under an 11×11 Gaussian window with
+    σ = 1.5, evaluated only where the window lies inside the image.
+    """
+    x = np.asarray(ref_srgb, dtype=np.float64)
+    y = np.asarray(test_srgb, dtype=np.float64)
+    _check_pair(x, y)
+    if x.ndim == 2:
+        x, y = x[..., None], y[..., None]
+    if min(x.shape[0], x.shape[1]) < SSIM_WINDOW:
+        raise ValueError(f"SSIM needs images of at least {SSIM_WINDOW}×{SSIM_WINDOW} pixels, got "
+                         f"{x.shape[1]}×{x.shape[0]}")
+    g = _gaussian_window_1d()
+    mu_x, mu_y = _valid_filter(x, g), _valid_filter(y, g)
+    var_x = _valid_filter(x * x, g) - mu_x * mu_x
+    var_y = _valid_filter(y * y, g) - mu_y * mu_y
+    cov_xy = _valid_filter(x * y, g) - mu_x * mu_y
+    c1, c2 = SSIM_K1**2, SSIM_K2**2  # data range 1
+    return ((2 * mu_x * mu_y + c1) * (2 * cov_xy + c2)) / ((mu_x**2 + mu_y**2 + c1) * (var_x + var_y + c2))
+
+
+def ssim(ref_rgb: np.ndarray, test_rgb: np.ndarray) -> float:
+    """Mean SSIM of two linear RGB images on sRGB-encoded clamped colour (see `ssim_map`): the
+    mean of each channel's map over the valid region, then the mean over channels. Equals
+    skimage.metrics.structural_similarity(channel_axis=2, gaussian_weights=True, sigma=1.5,
+    use_sample_covariance=False, data_range=1) on the encoded images."""
+    return float(ssim_map(srgb_encode(ref_rgb), srgb_encode(test_rgb)).mean(axis=(0, 1)).mean())
+
+
+def flip(ref_rgb: np.ndarray, test_rgb: np.ndarray, ppd: float = _flip.DEFAULT_PPD) -> Tuple[float, np.ndarray]:
+    """(mean, per-pixel map) of LDR-FLIP between two linear RGB images, computed on their
+    sRGB-encoded clamped colour at ppd pixels per degree (see lfprobe.core.flip)."""
+    return _flip.flip(srgb_encode(ref_rgb), srgb_encode(test_rgb), ppd)
+
+
+def depth_errors(ref_depth: np.ndarray, test_depth: np.ndarray, ref_hit: np.ndarray,
+                 test_hit: np.ndarray) -> Dict[str, Optional[float]]:
+    """Depth errors over the pixels both images hit (and whose depths are finite, reference > 0):
+    absrel = mean(|d_test − d_ref| / d_ref), rmse = sqrt(mean((d_test − d_ref)²)), pixels = their
+    count. absrel and rmse are None when there are no such pixels."""
+    ref = np.asarray(ref_depth, dtype=np.float64)
+    test = np.asarray(test_depth, dtype=np.float64)
+    _check_pair(ref, test)
+    mask = (np.asarray(ref_hit, dtype=bool) & np.asarray(test_hit, dtype=bool)
+            & np.isfinite(ref) & np.isfinite(test) & (ref > 0))
+    n = int(mask.sum())
+    if n == 0:
+        return {"absrel": None, "rmse": None, "pixels": 0}
+    diff = test[mask] - ref[mask]
+    return {
+        "absrel": float(np.mean(np.abs(diff) / ref[mask])),
+        "rmse": float(np.sqrt(np.mean(diff * diff))),
+        "pixels": n,
+    }
+
+
+def confusion(ref_status: np.ndarray, test_status: np.ndarray) -> Dict[str, object]:
+    """Probe answers {HIT, MISS, UNKNOWN} against ground truth {hit, miss}.
+
+    Ground truth hit: reference status HIT (1); miss: status MISS (0); reference pixels with any
+    other status are left out (counted in ref_unknown). Rates:
+      hole_rate       = #(gt hit, test MISS or UNKNOWN) / #gt hit   (0 when #gt hit = 0)
+      false_miss_rate = #(gt hit, test MISS) / #gt hit              (0 when #gt hit = 0)
+      false_hit_rate  = #(gt miss, test HIT) / #gt miss             (0 when #gt miss = 0)
+      unknown_rate    = #(test UNKNOWN) / #all pixels
+    Returns those rates and counts = {"gt_hit": {HIT, MISS, UNKNOWN}, "gt_miss": {...},
+    "ref_unknown": n}.
+    """
+    ref = np.asarray(ref_status)
+    test = np.asarray(test_status)
+    _check_pair(ref, test)
+    gt_hit, gt_miss = ref == STATUS_HIT, ref == STATUS_MISS
+    answers = {"HIT": test == STATUS_HIT, "MISS": test == STATUS_MISS, "UNKNOWN": test == STATUS_UNKNOWN}
+    counts = {
+        "gt_hit": {name: int((gt_hit & a).sum()) for name, a in answers.items()},
+        "gt_miss": {name: int((gt_miss & a).sum()) for name, a in answers.items()},
+        "ref_unknown": int((~gt_hit & ~gt_miss).sum()),
+    }
+    n_hit, n_miss = int(gt_hit.sum()), int(gt_miss.sum())
+    holes = n_hit - counts["gt_hit"]["HIT"]
+    return {
+        "hole_rate": holes / n_hit if n_hit else 0.0,
+        "false_miss_rate": counts["gt_hit"]["MISS"] / n_hit if n_hit else 0.0,
+        "false_hit_rate": counts["gt_miss"]["HIT"] / n_miss if n_miss else 0.0,
+        "unknown_rate": float(answers["UNKNOWN"].mean()) if test.size else 0.0,
+        "counts": counts,
+    }
+
+
+def visible_colour(image: Dict[str, np.ndarray]) -> np.ndarray:
+    """Linear RGB of a read_image dict with every pixel that is not HIT set to black."""
+    rgb = np.asarray(image["rgba"], dtype=np.float64)[..., :3]
+    return np.where((np.asarray(image["status"]) == STATUS_HIT)[..., None], rgb, 0.0)
+
+
+def compare_images(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
+                   ppd: float = _flip.DEFAULT_PPD) -> Dict[str, object]:
+    """All metrics between a ground-truth image and a test image; see compare_images_with_map."""
+    return compare_images_with_map(ref, test, ppd)[0]
+
+
+def compare_images_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
+                            ppd: float = _flip.DEFAULT_PPD) -> Tuple[Dict[str, object], np.ndarray]:
+    """(metrics, FLIP error map) between a ground-truth and a test image (read_image dicts of one size).
+
+    Colour metrics (psnr, ssim, flip) use every pixel, with pixels that are not HIT black in both
+    images. ssim is None for images under 11 pixels on a side. Returns psnr, ssim, flip,
+    depth_absrel, depth_rmse, depth_pixels, hole_rate, false_hit_rate, false_miss_rate,
+    unknown_rate, counts, width, height, ppd and the definitions of all of them.
+    """
+    if ref["rgba"].shape != test["rgba"].shape:
+        h0, w0 = ref["rgba"].shape[:2]
+        h1, w1 = test["rgba"].shape[:2]
+        raise ValueError(f"images differ in size: reference {w0}×{h0}, test {w1}×{h1}")
+    height, width = ref["rgba"].shape[:2]
+    ref_rgb, test_rgb = visible_colour(ref), visible_colour(test)
+    try:
+        ssim_value: Optional[float] = ssim(ref_rgb, test_rgb)
+    except ValueError:
+        ssim_value = None
+    flip_mean, error_map = flip(ref_rgb, test_rgb, ppd)
+    ref_hit, test_hit = ref["status"] == STATUS_HIT, test["status"] == STATUS_HIT
+    depth = depth_errors(ref["depth"], test["depth"], ref_hit, test_hit)
+    result: Dict[str, object] = {
+        "psnr": psnr(ref_rgb, test_rgb),
+        "ssim": ssim_value,
+        "flip": flip_mean,
+        "depth_absrel": depth["absrel"],
+        "depth_rmse": depth["rmse"],
+        "depth_pixels": depth["pixels"],
+    }
+    result.update(confusion(ref["status"], test["status"]))
+    result.update({"width": int(width), "height": int(height), "ppd": float(ppd),
+                   "definitions": dict(DEFINITIONS)})
+    return result, error_map

@@ -1,0 +1,165 @@
+// Mesh readers: the OBJ/MTL/texture test data of shared/data/meshes, PLY meshes, and errors
+// that name the file and line.
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "lfprobe/color.hpp"
+#include "lfprobe/error.hpp"
+#include "lfprobe/mesh_reader.hpp"
+
+namespace lfprobe {
+namespace {
+
+const std::string kMeshes = std::string(LFPROBE_SHARED_DATA) + "/meshes";
+
+std::string temp_file(const std::string& name, const std::string& text) {
+    const auto dir = std::filesystem::temp_directory_path() / "lfprobe_mesh_reader_test";
+    std::filesystem::create_directories(dir);
+    const std::string path = (dir / name).string();
+    std::ofstream(path, std::ios::binary) << text;
+    return path;
+}
+
+std::size_t material_named(const Mesh& m, const std::string& name) {
+    for (std::size_t i = 0; i < m.materials.size(); ++i) {
+        if (m.materials[i].name == name) {
+            return i;
+        }
+    }
+    return m.materials.size();
+}
+
+TEST(MeshReader, CornellBoxTrianglesMaterialsObjects) {
+    const Mesh m = read_mesh(kMeshes + "/cornell_box/CornellBox-Original.obj");
+    // 18 faces in the file: 2 quads per wall (5 walls), 5 quads per box (2 boxes), 1 light quad
+    // ... every face is a quad, fan-triangulated into 2 triangles.
+    EXPECT_EQ(m.triangle_count(), 36u);
+    EXPECT_EQ(m.object_names.size(), 8u);
+    const std::size_t left = material_named(m, "leftWall");
+    ASSERT_LT(left, m.materials.size());
+    EXPECT_FLOAT_EQ(m.materials[left].base_color.x, 0.63f);
+    EXPECT_FLOAT_EQ(m.materials[left].base_color.y, 0.065f);
+    EXPECT_FLOAT_EQ(m.materials[left].base_color.z, 0.05f);
+    EXPECT_FALSE(m.has_uvs());
+    const MeshBounds b = m.bounds();
+    EXPECT_FLOAT_EQ(b.min.y, 0.0f);
+    EXPECT_FLOAT_EQ(b.max.y, 1.99f);
+}
+
+TEST(MeshReader, SpotTextureLoadsAndSamples) {
+    const Mesh m = read_mesh(kMeshes + "/spot/spot_triangulated_textured.obj");
+    EXPECT_EQ(m.triangle_count(), 5856u);
+    ASSERT_TRUE(m.has_uvs());
+    ASSERT_EQ(m.materials.size(), 1u);
+    const auto& tex = m.materials[0].texture;
+    ASSERT_TRUE(tex);
+    EXPECT_GT(tex->width, 0);
+    // The centre of texel (x, y) (y = 0 the top row of the file) is uv ((x+.5)/w, 1-(y+.5)/h):
+    // sampling there returns that texel exactly.
+    const int x = tex->width / 3;
+    const int y = tex->height / 5;
+    const glm::vec2 uv{(static_cast<float>(x) + 0.5f) / static_cast<float>(tex->width),
+                       1.0f - (static_cast<float>(y) + 0.5f) / static_cast<float>(tex->height)};
+    const glm::vec3 s = tex->sample(uv);
+    const glm::vec3 t = tex->texel(x, y);
+    EXPECT_NEAR(s.x, t.x, 1e-4f);
+    EXPECT_NEAR(s.y, t.y, 1e-4f);
+    EXPECT_NEAR(s.z, t.z, 1e-4f);
+    // Repeat wrap: one period over gives the same value.
+    const glm::vec3 w = tex->sample(uv + glm::vec2(1.0f, -2.0f));
+    EXPECT_NEAR(w.x, t.x, 1e-3f);
+}
+
+TEST(MeshReader, CrateQuadsWithJpgTexture) {
+    const Mesh m = read_mesh(kMeshes + "/crate/crate.obj");
+    EXPECT_EQ(m.triangle_count(), 12u);
+    ASSERT_TRUE(m.materials[0].texture);
+    EXPECT_FLOAT_EQ(m.materials[0].base_color.x, 0.64f);
+    EXPECT_EQ(m.object_names[0], "Cube_Cube.001");
+}
+
+TEST(MeshReader, TextureIsSrgbDecodedAndVFlipped) {
+    // A 1×2 image: top row red (255,0,0), bottom row (128,128,128) grey, written as binary PPM
+    // is not read by stb as PNG... use a tiny PNG through stb's own PNM support instead.
+    const std::string path = temp_file("two.ppm", std::string("P6\n1 2\n255\n") +
+                                                      std::string("\xff\x00\x00\x80\x80\x80", 6));
+    const Texture t = Texture::load(path);
+    ASSERT_EQ(t.width, 1);
+    ASSERT_EQ(t.height, 2);
+    // v near 0 is the bottom row (grey), v near 1 the top row (red).
+    EXPECT_NEAR(t.sample({0.5f, 0.25f}).x, srgb_to_linear(128.0f / 255.0f), 1e-6f);
+    EXPECT_NEAR(t.sample({0.5f, 0.75f}).x, 1.0f, 1e-6f);
+    EXPECT_NEAR(t.sample({0.5f, 0.75f}).y, 0.0f, 1e-6f);
+}
+
+TEST(MeshReader, ObjNegativeIndicesPolygonsAndObjects) {
+    const std::string path = temp_file("poly.obj", "o first\n"
+                                                   "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 2 0\n"
+                                                   "f -5 -4 -3 -2 -1\n"
+                                                   "g second\nf 1 2 3\n");
+    const Mesh m = read_obj(path);
+    EXPECT_EQ(m.triangle_count(), 4u);
+    ASSERT_EQ(m.object_names.size(), 2u);
+    EXPECT_EQ(m.object[0], 0u);
+    EXPECT_EQ(m.object[3], 1u);
+    EXPECT_EQ(m.triangles[2][2], 4u);
+}
+
+TEST(MeshReader, ObjErrorsNameFileAndLine) {
+    const std::string path = temp_file("bad.obj", "v 0 0 0\nv 1 0 0\nf 1 2 7\n");
+    try {
+        (void)read_obj(path);
+        FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find(path + ":3:"), std::string::npos) << what;
+        EXPECT_NE(what.find("expected"), std::string::npos) << what;
+    }
+    const std::string bad_v = temp_file("bad_v.obj", "v 0 zero 0\n");
+    EXPECT_THROW((void)read_obj(bad_v), InputError);
+    EXPECT_THROW((void)read_mesh(temp_file("x.stl", "")), InputError);
+}
+
+TEST(MeshReader, PlyAsciiAndBinaryAgree) {
+    const std::string header_fmt = "ply\nformat %s 1.0\nelement vertex 4\nproperty float x\n"
+                                   "property float y\nproperty float z\nproperty uchar red\n"
+                                   "property uchar green\nproperty uchar blue\n"
+                                   "element face 1\nproperty list uchar int vertex_indices\n"
+                                   "end_header\n";
+    char header[512];
+    std::snprintf(header, sizeof header, header_fmt.c_str(), "ascii");
+    const std::string ascii = temp_file(
+        "quad_ascii.ply", std::string(header) + "0 0 0 255 0 0\n1 0 0 255 0 0\n1 1 0 255 0 0\n"
+                                                "0 1 0 255 0 0\n4 0 1 2 3\n");
+    std::snprintf(header, sizeof header, header_fmt.c_str(), "binary_little_endian");
+    std::string bin(header);
+    const float xyz[4][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+    for (const auto& v : xyz) {
+        bin.append(reinterpret_cast<const char*>(v), sizeof v);
+        bin.append("\xff\x00\x00", 3);
+    }
+    bin.push_back('\x04');
+    const std::int32_t idx[4] = {0, 1, 2, 3};
+    bin.append(reinterpret_cast<const char*>(idx), sizeof idx);
+    const std::string binary = temp_file("quad_binary.ply", bin);
+    for (const std::string& path : {ascii, binary}) {
+        const Mesh m = read_mesh(path);
+        ASSERT_EQ(m.triangle_count(), 2u) << path;
+        ASSERT_TRUE(m.has_colors());
+        EXPECT_FLOAT_EQ(m.corner_colors[0].x, 1.0f);
+        EXPECT_FLOAT_EQ(m.vertices[2].y, 1.0f);
+        EXPECT_EQ(m.triangles[1][2], 3u);
+    }
+    const std::string bad = temp_file("bad.ply", std::string(header).replace(
+                                                     std::string(header).find("binary"), 20,
+                                                     "ascii") +
+                                                     "0 0 0 255 0 0\n");
+    EXPECT_THROW((void)read_mesh(bad), InputError);
+}
+
+} // namespace
+} // namespace lfprobe
