@@ -481,6 +481,7 @@ PYBIND11_MODULE(_native, m) {
         py::arg("progress") = py::none(), "bake run to the end; see start_bake_probe_set.");
 
     lfprobe::python::bind_render(m);
+    lfprobe::python::bind_mesh(m);
 
     m.def(
         "read_probe", [](const std::string& path) { return probe_dict(read_probe_exr(path)); },

@@ -26,7 +26,10 @@ struct Planes {
     std::vector<float> status;
     std::vector<float> probe;
     std::vector<float> steps;
+    std::vector<float> object; // empty when the image has no object channel
 };
+
+constexpr const char* kObjectChannel = "object";
 
 Imf::FrameBuffer frame_buffer(RenderedImage& image, Planes& planes) {
     const std::size_t w = static_cast<std::size_t>(image.width);
@@ -47,6 +50,9 @@ Imf::FrameBuffer frame_buffer(RenderedImage& image, Planes& planes) {
     interleaved("status", planes.status.data(), 1);
     interleaved("probe", planes.probe.data(), 1);
     interleaved("steps", planes.steps.data(), 1);
+    if (!planes.object.empty()) {
+        interleaved(kObjectChannel, planes.object.data(), 1);
+    }
     return fb;
 }
 
@@ -75,10 +81,22 @@ void write_rendered_exr(const std::string& path, const RenderedImage& image,
         planes.probe[i] = static_cast<float>(image.probe[i]);
         planes.steps[i] = static_cast<float>(image.steps[i]);
     }
+    if (!image.object.empty()) {
+        if (image.object.size() != n) {
+            throw InputError(path + ": the object channel does not match the image size");
+        }
+        planes.object.resize(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            planes.object[i] = static_cast<float>(image.object[i]);
+        }
+    }
     Imf::Header header(image.width, image.height);
     header.compression() = Imf::ZIP_COMPRESSION;
     for (const char* name : kChannels) {
         header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    }
+    if (!planes.object.empty()) {
+        header.channels().insert(kObjectChannel, Imf::Channel(Imf::FLOAT));
     }
     header.insert(kFormatAttribute, Imf::StringAttribute(kFormatValue));
     if (!metadata.empty()) {
@@ -129,12 +147,18 @@ RenderedImage read_rendered_exr(const std::string& path, std::string* metadata) 
         planes.status.resize(image.pixel_count());
         planes.probe.resize(image.pixel_count());
         planes.steps.resize(image.pixel_count());
+        if (file.header().channels().findChannel(kObjectChannel) != nullptr) {
+            planes.object.resize(image.pixel_count());
+        }
         file.setFrameBuffer(frame_buffer(image, planes));
         file.readPixels(0, h - 1);
         for (std::size_t i = 0; i < image.pixel_count(); ++i) {
             image.status[i] = static_cast<std::uint8_t>(planes.status[i]);
             image.probe[i] = static_cast<std::int32_t>(planes.probe[i]);
             image.steps[i] = static_cast<std::uint32_t>(planes.steps[i]);
+        }
+        for (const float o : planes.object) {
+            image.object.push_back(static_cast<std::int32_t>(o));
         }
         return image;
     } catch (const InputError&) {

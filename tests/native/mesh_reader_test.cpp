@@ -35,8 +35,7 @@ std::size_t material_named(const Mesh& m, const std::string& name) {
 
 TEST(MeshReader, CornellBoxTrianglesMaterialsObjects) {
     const Mesh m = read_mesh(kMeshes + "/cornell_box/CornellBox-Original.obj");
-    // 18 faces in the file: 2 quads per wall (5 walls), 5 quads per box (2 boxes), 1 light quad
-    // ... every face is a quad, fan-triangulated into 2 triangles.
+    // 18 quads in the file (walls, two boxes, the light), each fan-triangulated into two.
     EXPECT_EQ(m.triangle_count(), 36u);
     EXPECT_EQ(m.object_names.size(), 8u);
     const std::size_t left = material_named(m, "leftWall");
@@ -83,8 +82,7 @@ TEST(MeshReader, CrateQuadsWithJpgTexture) {
 }
 
 TEST(MeshReader, TextureIsSrgbDecodedAndVFlipped) {
-    // A 1×2 image: top row red (255,0,0), bottom row (128,128,128) grey, written as binary PPM
-    // is not read by stb as PNG... use a tiny PNG through stb's own PNM support instead.
+    // A 1×2 image through stb's PNM support: top row red (255,0,0), bottom row grey 128.
     const std::string path = temp_file("two.ppm", std::string("P6\n1 2\n255\n") +
                                                       std::string("\xff\x00\x00\x80\x80\x80", 6));
     const Texture t = Texture::load(path);
@@ -154,10 +152,9 @@ TEST(MeshReader, PlyAsciiAndBinaryAgree) {
         EXPECT_FLOAT_EQ(m.vertices[2].y, 1.0f);
         EXPECT_EQ(m.triangles[1][2], 3u);
     }
-    const std::string bad = temp_file("bad.ply", std::string(header).replace(
-                                                     std::string(header).find("binary"), 20,
-                                                     "ascii") +
-                                                     "0 0 0 255 0 0\n");
+    const std::string bad = temp_file(
+        "bad.ply", std::string(header).replace(std::string(header).find("binary"), 20, "ascii") +
+                       "0 0 0 255 0 0\n");
     EXPECT_THROW((void)read_mesh(bad), InputError);
 }
 

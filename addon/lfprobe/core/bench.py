@@ -50,6 +50,26 @@ def room_faces():
     return faces
 
 
+def write_room_obj(path: str) -> None:
+    """The benchmark room as a mesh (two triangles per box face), the reference geometry that
+    Embree traces for the probe-versus-Embree ratio."""
+    lines = ["# lfprobe benchmark room"]
+    vertex = 0
+    for axis, w, bmin, bmax, _, _ in room_faces():
+        u, v = (axis + 1) % 3, (axis + 2) % 3
+        for a, b in ((0, 0), (1, 0), (1, 1), (0, 1)):
+            p = [0.0, 0.0, 0.0]
+            p[axis] = w
+            p[u] = (bmin[u], bmax[u])[a]
+            p[v] = (bmin[v], bmax[v])[b]
+            lines.append(f"v {p[0]:.6f} {p[1]:.6f} {p[2]:.6f}")
+        lines.append(f"f {vertex + 1} {vertex + 2} {vertex + 3}")
+        lines.append(f"f {vertex + 1} {vertex + 3} {vertex + 4}")
+        vertex += 4
+    with open(path, "w", encoding="ascii") as out:
+        out.write("\n".join(lines) + "\n")
+
+
 def room_surface_area() -> float:
     return float(sum(f[4] for f in room_faces()))
 

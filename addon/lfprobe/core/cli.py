@@ -12,7 +12,7 @@ import json
 import sys
 from typing import List, Optional, Sequence
 
-from . import cli_compare, native
+from . import cli_compare, cli_mesh, native
 from .pipeline import BakeOptions, ProbePlacementSpec, bake_from_scans
 from .probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
 from .progress import TerminalProgress
@@ -44,6 +44,11 @@ def _cmd_bake(args) -> int:
         normal_neighbours=args.normal_k,
     )
     progress = None if args.quiet else TerminalProgress()
+    if args.mesh:
+        options.extra["supersample"] = args.supersample
+        summary = cli_mesh.bake_from_mesh(args.mesh, args.out, placement, options, progress)
+        summary.setdefault("points", 0)
+        return _print_bake_summary(args, summary, f"{args.mesh[0]}")
     summary = bake_from_scans(
         args.scan,
         args.out,
@@ -54,24 +59,32 @@ def _cmd_bake(args) -> int:
         cache_dir="" if args.no_cache else args.cache,
         progress=progress,
     )
+    return _print_bake_summary(args, summary, f"{summary['points']:,} points")
+
+
+def _print_bake_summary(args, summary: dict, source: str) -> int:
     if args.json:
         print(json.dumps(summary, indent=2))
         return 0
     cov = summary["mean_coverage"]
     n = summary["probe_count"]
-    print(f"baked {n} probe(s) at {args.res}² from {summary['points']:,} points into {summary['folder']}")
-    print(
-        f"  normals {summary['normals_seconds']:.2f} s, bake {summary['bake_seconds']:.2f} s "
-        f"({summary['bake_seconds'] / n:.2f} s/probe), write {summary['write_seconds']:.2f} s"
-    )
+    print(f"baked {n} probe(s) at {args.res}² from {source} into {summary['folder']}")
+    timing = []
+    if "normals_seconds" in summary:
+        timing.append(f"normals {summary['normals_seconds']:.2f} s")
+    timing.append(f"bake {summary['bake_seconds']:.2f} s ({summary['bake_seconds'] / n:.2f} s/probe)")
+    if "write_seconds" in summary:
+        timing.append(f"write {summary['write_seconds']:.2f} s")
+    print("  " + ", ".join(timing))
     print(
         f"  coverage: surface {100 * cov['surface']:.2f}%, inferred {100 * cov['inferred']:.2f}%, "
         f"unknown {100 * cov['unknown']:.2f}%, empty {100 * cov['empty']:.2f}%"
     )
-    print(
-        f"  per probe: {_mib(summary['bytes_in_memory_per_probe'])} in memory, "
-        f"{_mib(summary['bytes_on_disk'] / n)} on disk"
-    )
+    if "bytes_in_memory_per_probe" in summary:
+        print(
+            f"  per probe: {_mib(summary['bytes_in_memory_per_probe'])} in memory, "
+            f"{_mib(summary['bytes_on_disk'] / n)} on disk"
+        )
     return 0
 
 
@@ -180,8 +193,13 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="lfprobe", description="Light field probes from laser scans.")
     sub = parser.add_subparsers(dest="command", required=True)
 
-    bake = sub.add_parser("bake", help="bake a probe set from scan files")
-    bake.add_argument("--scan", nargs="+", required=True, metavar="FILE", help=".xyz/.txt/.pts/.ply scans, merged")
+    bake = sub.add_parser("bake", help="bake a probe set from scan files or a mesh")
+    source = bake.add_mutually_exclusive_group(required=True)
+    source.add_argument("--scan", nargs="+", metavar="FILE", help=".xyz/.txt/.pts/.ply scans, merged")
+    source.add_argument("--mesh", nargs="+", metavar="FILE",
+                        help="an .obj (+.mtl) or .ply mesh, baked with Embree (exact distances)")
+    bake.add_argument("--supersample", type=int, default=1,
+                      help="--mesh: n×n rays per texel for the colour")
     bake.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X",
                       help="scanner positions X Y Z, one per scan file (world coordinates)")
     bake.add_argument("--probe", nargs="+", type=float, action="append", metavar="X",
@@ -244,6 +262,7 @@ def build_parser() -> argparse.ArgumentParser:
     camera.set_defaults(run=_cmd_camera)
 
     cli_compare.add_parsers(sub)
+    cli_mesh.add_parsers(sub)
 
     bench = sub.add_parser("bench", help="benchmarks that print measured figures")
     bench.add_argument("suite", choices=["core", "render"],

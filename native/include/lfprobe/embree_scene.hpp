@@ -1,0 +1,61 @@
+// A Mesh in Embree 3 for closest-hit queries: the reference geometry of ground truth renders,
+// mesh bakes and simulated scans (DESIGN.md §4). One triangle geometry per mesh object, built
+// with RTC_SCENE_FLAG_ROBUST so that rays along shared edges do not slip through.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "lfprobe/mesh.hpp"
+#include "lfprobe/ray.hpp"
+
+namespace lfprobe {
+
+struct MeshHit {
+    bool hit = false;
+    // Distance along the (unit) ray direction: Embree finds the triangle, then t is recomputed
+    // in double against the triangle's plane, so that depths are exact to double rounding
+    // rather than to Embree's float ray.
+    double t = 0.0;
+    glm::vec3 geometric_normal{0.0f}; // unit, right-handed winding (v1-v0)×(v2-v0), not flipped
+    glm::vec3 shading_normal{0.0f};   // unit, interpolated vn when the mesh has them, else
+                                      // the geometric normal
+    std::uint32_t triangle = 0;
+    float u = 0.0f; // barycentrics: p = (1-u-v)·v0 + u·v1 + v·v2
+    float v = 0.0f;
+    glm::vec2 uv{0.0f};
+    glm::vec3 base_color{0.0f}; // linear: texture × material × vertex colour
+    std::int32_t object = -1;
+};
+
+class EmbreeScene {
+public:
+    // Builds the scene (the mesh is copied into Embree's buffers; `mesh` must outlive the
+    // scene for colours and normals). Throws std::runtime_error on an Embree device error.
+    explicit EmbreeScene(const Mesh& mesh);
+    ~EmbreeScene();
+    EmbreeScene(const EmbreeScene&) = delete;
+    EmbreeScene& operator=(const EmbreeScene&) = delete;
+
+    [[nodiscard]] const Mesh& mesh() const { return *mesh_; }
+
+    // The closest hit in [ray.t_min, ray.t_max] of a ray in the mesh's local frame, with all
+    // the attributes filled. Thread-safe.
+    [[nodiscard]] MeshHit intersect(const Ray& ray) const;
+    // Only whether and where: t (Embree's float) and the triangle; for throughput figures.
+    [[nodiscard]] bool intersect_fast(const Ray& ray, float& t, std::uint32_t& triangle) const;
+
+    // Normal `n` turned to face a viewer looking along `direction`.
+    [[nodiscard]] static glm::vec3 facing(const glm::vec3& n, const glm::dvec3& direction);
+
+private:
+    struct Impl;
+    const Mesh* mesh_;
+    std::unique_ptr<Impl> impl_;
+};
+
+} // namespace lfprobe

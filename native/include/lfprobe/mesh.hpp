@@ -1,0 +1,60 @@
+// A triangle mesh scene as the ground truth renderer, the mesh bake and the simulated scanner
+// use it (DESIGN.md §4): float positions in a local frame (world = world_offset + position),
+// per-corner texture coordinates, colours and normals when the file has them, and per-triangle
+// material and object ids. Colours are linear; the quantity rendered is the unlit base colour
+// texture × material colour × vertex colour.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+#include "lfprobe/texture.hpp"
+
+namespace lfprobe {
+
+struct Material {
+    std::string name;
+    glm::vec3 base_color{1.0f};             // linear (MTL Kd is taken as linear, as Blender does)
+    std::shared_ptr<const Texture> texture; // base-colour texture (map_Kd), or null
+};
+
+struct MeshBounds {
+    glm::vec3 min{0.0f};
+    glm::vec3 max{0.0f};
+};
+
+struct Mesh {
+    std::string path;
+    glm::dvec3 world_offset{0.0};
+    std::vector<glm::vec3> vertices;
+    std::vector<std::array<std::uint32_t, 3>> triangles; // indices into vertices
+    // Per corner (3 per triangle) when present, else empty.
+    std::vector<glm::vec2> corner_uvs;
+    std::vector<glm::vec3> corner_colors; // linear
+    std::vector<glm::vec3> corner_normals;
+    // Per triangle.
+    std::vector<std::uint32_t> material; // index into materials
+    std::vector<std::uint32_t> object;   // index into object_names
+    std::vector<Material> materials;     // never empty once a reader has run
+    std::vector<std::string> object_names;
+
+    [[nodiscard]] std::size_t triangle_count() const { return triangles.size(); }
+    [[nodiscard]] bool has_uvs() const { return !corner_uvs.empty(); }
+    [[nodiscard]] bool has_colors() const { return !corner_colors.empty(); }
+    [[nodiscard]] bool has_normals() const { return !corner_normals.empty(); }
+    // Bounds of the vertices that triangles use (local frame); zero for an empty mesh.
+    [[nodiscard]] MeshBounds bounds() const;
+    // Linear base colour of triangle `tri` at barycentrics (u, v) (p = (1-u-v)·v0 + u·v1 +
+    // v·v2): texture at the interpolated uv × material colour × interpolated vertex colour.
+    [[nodiscard]] glm::vec3 base_color(std::size_t tri, float u, float v) const;
+    // Throws InputError when indices or per-triangle arrays are inconsistent.
+    void validate(const std::string& where) const;
+};
+
+} // namespace lfprobe

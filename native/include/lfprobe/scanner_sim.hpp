@@ -1,0 +1,56 @@
+// A simulated terrestrial laser scanner (DESIGN.md §4 "Ground truth and simulated scans"): the
+// reference mesh scanned from a position on a regular azimuth/elevation pattern with range
+// noise, written as a FARO-style "x y z r g b" file that the scan readers take back in.
+//
+// Parametrisation: a FARO sweeps 360° horizontally while its mirror covers ~300° vertically,
+// so every direction above 90° − fov/2 is seen once. lfprobe samples the same set of
+// directions as azimuth φ = k·step in [0°, 360°) and elevation θ = 90° − fov/2 + j·step up to
+// 90° (default fov 300°: θ from −60° to +90°); the zenith (θ = 90°) is one ray, not one per
+// azimuth. Direction = (cos θ cos φ, cos θ sin φ, sin θ), world Z up.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include <glm/vec3.hpp>
+
+#include "lfprobe/embree_scene.hpp"
+#include "lfprobe/progress.hpp"
+
+namespace lfprobe {
+
+struct ScannerSettings {
+    glm::dvec3 position{0.0}; // world coordinates
+    double step_deg = 0.5;
+    double vertical_fov_deg = 300.0; // (0, 360]
+    // Range noise: normal, σ = noise_mm at 10 m, scaled linearly with the range.
+    double noise_mm = 2.0;
+    std::uint64_t seed = 1;
+    double max_range = 1.0e4; // metres; farther hits are not returned, as on a real scanner
+};
+
+struct ScanStats {
+    std::uint64_t rays = 0;
+    std::uint64_t points = 0;
+    double seconds = 0.0;
+};
+
+struct SimulatedPoint {
+    glm::dvec3 position{0.0}; // world
+    glm::vec3 color{0.0f};    // linear base colour
+};
+
+// The points of one simulated scan, in ray order (elevation rows bottom up, azimuth within a
+// row). Deterministic: the noise of ray k depends only on the seed and k.
+[[nodiscard]] std::vector<SimulatedPoint> simulate_scan(const EmbreeScene& scene,
+                                                        const ScannerSettings& settings,
+                                                        Progress* progress = nullptr,
+                                                        ScanStats* stats = nullptr);
+
+// simulate_scan written to `path` (through write_file_atomically) with the header comment
+// "# scanner X Y Z" and "x y z r g b" lines, colours as 8-bit sRGB, coordinates in world units
+// with 6 decimals. Returns the stats.
+ScanStats write_simulated_scan(const EmbreeScene& scene, const ScannerSettings& settings,
+                               const std::string& path, Progress* progress = nullptr);
+
+} // namespace lfprobe

@@ -1,0 +1,31 @@
+// A base-colour texture of a mesh material: decoded with stb_image from PNG or JPG, its 8-bit
+// sRGB values decoded to linear float once on load, so that sampling (bilinear, repeat wrap)
+// averages linear values as a renderer would.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/vec2.hpp>
+#include <glm/vec3.hpp>
+
+namespace lfprobe {
+
+struct Texture {
+    std::string path;
+    int width = 0;
+    int height = 0;
+    std::vector<float> rgb; // linear, 3 per texel, row 0 = the TOP row of the image file
+
+    // Throws IoError when the file is missing, InputError when stb cannot decode it.
+    [[nodiscard]] static Texture load(const std::string& path);
+
+    // Linear colour at OBJ texture coordinates uv: u right, v UP (so v = 0 is the bottom row
+    // of the image file), texel centres at ((x + 0.5) / w, 1 - (y + 0.5) / h); bilinear with
+    // repeat wrap in both directions.
+    [[nodiscard]] glm::vec3 sample(const glm::vec2& uv) const;
+    // The linear colour of texel (x, y), y = 0 the top row of the file.
+    [[nodiscard]] glm::vec3 texel(int x, int y) const;
+};
+
+} // namespace lfprobe

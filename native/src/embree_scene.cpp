@@ -1,0 +1,198 @@
+#include "lfprobe/embree_scene.hpp"
+
+#include <limits>
+#include <stdexcept>
+#include <string>
+
+#include <embree3/rtcore.h>
+#include <glm/geometric.hpp>
+
+#include "lfprobe/error.hpp"
+
+namespace lfprobe {
+
+namespace {
+
+// Errors reported by Embree's callback are turned into exceptions after the failing call.
+void error_callback(void* user, RTCError code, const char* message) {
+    auto* last = static_cast<std::string*>(user);
+    *last = "Embree error " + std::to_string(static_cast<int>(code)) + ": " +
+            (message != nullptr ? message : "");
+}
+
+} // namespace
+
+struct EmbreeScene::Impl {
+    RTCDevice device = nullptr;
+    RTCScene scene = nullptr;
+    std::string last_error;
+    std::vector<std::vector<std::uint32_t>> triangle_of; // per geometry: primID → triangle
+
+    void check(const char* what) {
+        const RTCError e = rtcGetDeviceError(device);
+        if (e != RTC_ERROR_NONE) {
+            throw std::runtime_error(
+                std::string(what) + ": " +
+                (last_error.empty() ? "Embree device error " + std::to_string(static_cast<int>(e))
+                                    : last_error));
+        }
+    }
+    ~Impl() {
+        if (scene != nullptr) {
+            rtcReleaseScene(scene);
+        }
+        if (device != nullptr) {
+            rtcReleaseDevice(device);
+        }
+    }
+};
+
+EmbreeScene::EmbreeScene(const Mesh& mesh) : mesh_(&mesh), impl_(std::make_unique<Impl>()) {
+    impl_->device = rtcNewDevice(nullptr);
+    if (impl_->device == nullptr) {
+        throw std::runtime_error("Embree: cannot create a device (error " +
+                                 std::to_string(static_cast<int>(rtcGetDeviceError(nullptr))) +
+                                 ")");
+    }
+    rtcSetDeviceErrorFunction(impl_->device, error_callback, &impl_->last_error);
+    impl_->scene = rtcNewScene(impl_->device);
+    rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
+    impl_->check("Embree scene");
+
+    std::vector<std::vector<std::uint32_t>> by_object(
+        std::max<std::size_t>(1, mesh.object_names.size()));
+    for (std::size_t i = 0; i < mesh.triangles.size(); ++i) {
+        by_object[mesh.object[i]].push_back(static_cast<std::uint32_t>(i));
+    }
+    for (const auto& tris : by_object) {
+        if (tris.empty()) {
+            continue;
+        }
+        RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
+        // Three unshared vertices per triangle: the object's triangles are a subset of the
+        // mesh, and copying them keeps Embree's barycentrics in the mesh's corner order.
+        auto* vb = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0,
+                                                               RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                                               3 * tris.size()));
+        auto* ib = static_cast<std::uint32_t*>(
+            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
+                                    3 * sizeof(std::uint32_t), tris.size()));
+        impl_->check("Embree geometry buffers");
+        for (std::size_t j = 0; j < tris.size(); ++j) {
+            for (std::size_t k = 0; k < 3; ++k) {
+                const glm::vec3& p = mesh.vertices[mesh.triangles[tris[j]][k]];
+                vb[9 * j + 3 * k] = p.x;
+                vb[9 * j + 3 * k + 1] = p.y;
+                vb[9 * j + 3 * k + 2] = p.z;
+                ib[3 * j + k] = static_cast<std::uint32_t>(3 * j + k);
+            }
+        }
+        rtcCommitGeometry(geom);
+        const unsigned id = rtcAttachGeometry(impl_->scene, geom);
+        rtcReleaseGeometry(geom);
+        impl_->check("Embree geometry");
+        if (id >= impl_->triangle_of.size()) {
+            impl_->triangle_of.resize(id + 1);
+        }
+        impl_->triangle_of[id] = tris;
+    }
+    rtcCommitScene(impl_->scene);
+    impl_->check("Embree scene build");
+}
+
+EmbreeScene::~EmbreeScene() = default;
+
+namespace {
+
+RTCRayHit make_ray(const Ray& ray) {
+    RTCRayHit rh{};
+    rh.ray.org_x = static_cast<float>(ray.origin.x);
+    rh.ray.org_y = static_cast<float>(ray.origin.y);
+    rh.ray.org_z = static_cast<float>(ray.origin.z);
+    rh.ray.dir_x = static_cast<float>(ray.direction.x);
+    rh.ray.dir_y = static_cast<float>(ray.direction.y);
+    rh.ray.dir_z = static_cast<float>(ray.direction.z);
+    rh.ray.tnear = static_cast<float>(ray.t_min);
+    rh.ray.tfar = std::isfinite(ray.t_max) ? static_cast<float>(ray.t_max)
+                                           : std::numeric_limits<float>::infinity();
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.time = 0.0f;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    return rh;
+}
+
+} // namespace
+
+bool EmbreeScene::intersect_fast(const Ray& ray, float& t, std::uint32_t& triangle) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh = make_ray(ray);
+    rtcIntersect1(impl_->scene, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+        return false;
+    }
+    t = rh.ray.tfar;
+    triangle = impl_->triangle_of[rh.hit.geomID][rh.hit.primID];
+    return true;
+}
+
+glm::vec3 EmbreeScene::facing(const glm::vec3& n, const glm::dvec3& direction) {
+    const double d = static_cast<double>(n.x) * direction.x +
+                     static_cast<double>(n.y) * direction.y +
+                     static_cast<double>(n.z) * direction.z;
+    return d > 0.0 ? -n : n;
+}
+
+MeshHit EmbreeScene::intersect(const Ray& ray) const {
+    MeshHit out;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh = make_ray(ray);
+    rtcIntersect1(impl_->scene, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+        return out;
+    }
+    const Mesh& m = *mesh_;
+    const std::uint32_t tri = impl_->triangle_of[rh.hit.geomID][rh.hit.primID];
+    out.hit = true;
+    out.triangle = tri;
+    out.u = rh.hit.u;
+    out.v = rh.hit.v;
+    out.object = static_cast<std::int32_t>(m.object[tri]);
+    const glm::dvec3 p0(m.vertices[m.triangles[tri][0]]);
+    const glm::dvec3 p1(m.vertices[m.triangles[tri][1]]);
+    const glm::dvec3 p2(m.vertices[m.triangles[tri][2]]);
+    const glm::dvec3 n = glm::cross(p1 - p0, p2 - p0);
+    const double len = glm::length(n);
+    const glm::dvec3 unit = len > 0.0 ? n / len : glm::dvec3(0.0, 0.0, 1.0);
+    out.geometric_normal = glm::vec3(unit);
+    // The plane intersection in double; Embree's float t stays when the ray grazes the plane.
+    const double denom = glm::dot(unit, ray.direction);
+    out.t = static_cast<double>(rh.ray.tfar);
+    if (std::abs(denom) > 1e-6) {
+        const double t_plane = glm::dot(unit, p0 - ray.origin) / denom;
+        if (std::abs(t_plane - out.t) <= 1e-3 * std::max(1.0, out.t)) {
+            out.t = t_plane;
+        }
+    }
+    const float w = 1.0f - out.u - out.v;
+    out.shading_normal = out.geometric_normal;
+    if (m.has_normals()) {
+        const glm::vec3 s = w * m.corner_normals[3 * tri] + out.u * m.corner_normals[3 * tri + 1] +
+                            out.v * m.corner_normals[3 * tri + 2];
+        const float sl = glm::length(s);
+        if (sl > 0.0f && std::isfinite(sl)) {
+            out.shading_normal = s / sl;
+        }
+    }
+    if (m.has_uvs()) {
+        out.uv = w * m.corner_uvs[3 * tri] + out.u * m.corner_uvs[3 * tri + 1] +
+                 out.v * m.corner_uvs[3 * tri + 2];
+    }
+    out.base_color = m.base_color(tri, out.u, out.v);
+    return out;
+}
+
+} // namespace lfprobe

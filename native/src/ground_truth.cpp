@@ -1,0 +1,171 @@
+#include "lfprobe/ground_truth.hpp"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/blocked_range2d.h>
+#include <tbb/parallel_for.h>
+
+#include "lfprobe/error.hpp"
+#include "lfprobe/probe_trace.hpp"
+
+namespace lfprobe {
+
+nlohmann::json GroundTruthStats::to_json() const {
+    return nlohmann::json{{"rays", rays},
+                          {"hits", hits},
+                          {"pixels", pixels},
+                          {"seconds", seconds},
+                          {"rays_per_second", rays_per_second()}};
+}
+
+namespace {
+
+int samples_per_axis(int samples_per_pixel) {
+    const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(samples_per_pixel))));
+    if (samples_per_pixel < 1 || n * n != samples_per_pixel) {
+        throw InputError("ground truth: samples_per_pixel must be a square (1, 4, 9, 16, ...), "
+                         "got " +
+                         std::to_string(samples_per_pixel));
+    }
+    return n;
+}
+
+} // namespace
+
+RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera,
+                                  const GroundTruthSettings& settings, Progress* progress,
+                                  GroundTruthStats* stats) {
+    if (settings.tile_size < 1) {
+        throw InputError("ground truth: tile_size must be at least 1");
+    }
+    const int n = samples_per_axis(settings.samples_per_pixel);
+    RenderedImage image(camera.width, camera.height);
+    image.object.assign(image.pixel_count(), -1);
+    if (progress != nullptr) {
+        progress->begin_stage("ground truth", image.pixel_count());
+    }
+    const glm::dvec3 offset = scene.mesh().world_offset;
+    const auto tile = static_cast<std::size_t>(settings.tile_size);
+    const float inv_samples = 1.0f / static_cast<float>(n * n);
+    std::atomic<std::uint64_t> rays{0};
+    const auto start = std::chrono::steady_clock::now();
+    tbb::parallel_for(
+        tbb::blocked_range2d<int>(0, camera.height, tile, 0, camera.width, tile),
+        [&](const tbb::blocked_range2d<int>& r) {
+            if (progress != nullptr) {
+                progress->throw_if_cancelled();
+            }
+            std::uint64_t tile_rays = 0;
+            for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
+                for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
+                    const std::size_t i = image.index(x, y);
+                    const Ray centre_ray = camera.local_pixel_ray(x, y, offset);
+                    const MeshHit centre = scene.intersect(centre_ray);
+                    ++tile_rays;
+                    glm::vec3 colour{0.0f};
+                    float coverage = 0.0f;
+                    if (n == 1) {
+                        if (centre.hit) {
+                            colour = centre.base_color;
+                            coverage = 1.0f;
+                        }
+                    } else {
+                        // Summed in a fixed order: the same floats for any thread count.
+                        for (int sy = 0; sy < n; ++sy) {
+                            for (int sx = 0; sx < n; ++sx) {
+                                const double ox = (sx + 0.5) / n;
+                                const double oy = (sy + 0.5) / n;
+                                const MeshHit h =
+                                    scene.intersect(camera.local_pixel_ray(x, y, offset, ox, oy));
+                                ++tile_rays;
+                                if (h.hit) {
+                                    colour += h.base_color;
+                                    coverage += 1.0f;
+                                }
+                            }
+                        }
+                        colour *= inv_samples;
+                        coverage *= inv_samples;
+                    }
+                    image.rgba[4 * i] = colour.x;
+                    image.rgba[4 * i + 1] = colour.y;
+                    image.rgba[4 * i + 2] = colour.z;
+                    image.rgba[4 * i + 3] = coverage;
+                    if (centre.hit) {
+                        const glm::vec3 nrm =
+                            EmbreeScene::facing(centre.shading_normal, centre_ray.direction);
+                        image.depth[i] = static_cast<float>(centre.t);
+                        image.normal[3 * i] = nrm.x;
+                        image.normal[3 * i + 1] = nrm.y;
+                        image.normal[3 * i + 2] = nrm.z;
+                        image.status[i] = static_cast<std::uint8_t>(TraceStatus::Hit);
+                        image.object[i] = centre.object;
+                    }
+                }
+            }
+            rays.fetch_add(tile_rays, std::memory_order_relaxed);
+            if (progress != nullptr) {
+                progress->advance(r.rows().size() * r.cols().size());
+            }
+        },
+        tbb::simple_partitioner());
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (stats != nullptr) {
+        *stats = GroundTruthStats{};
+        stats->rays = rays.load();
+        stats->pixels = image.pixel_count();
+        stats->seconds = seconds;
+        for (const std::uint8_t s : image.status) {
+            stats->hits += s == static_cast<std::uint8_t>(TraceStatus::Hit) ? 1 : 0;
+        }
+    }
+    return image;
+}
+
+ThroughputResult embree_throughput(const EmbreeScene& scene, const Camera& camera, int repeats) {
+    if (repeats < 1) {
+        throw InputError("embree throughput: repeats must be at least 1");
+    }
+    const glm::dvec3 offset = scene.mesh().world_offset;
+    std::vector<Ray> rays(static_cast<std::size_t>(camera.width) *
+                          static_cast<std::size_t>(camera.height));
+    for (int y = 0; y < camera.height; ++y) {
+        for (int x = 0; x < camera.width; ++x) {
+            rays[static_cast<std::size_t>(y) * static_cast<std::size_t>(camera.width) +
+                 static_cast<std::size_t>(x)] = camera.local_pixel_ray(x, y, offset);
+        }
+    }
+    ThroughputResult result;
+    result.rays = rays.size();
+    result.repeats = repeats;
+    result.seconds = std::numeric_limits<double>::infinity();
+    for (int rep = 0; rep < repeats; ++rep) {
+        std::atomic<std::uint64_t> hits{0};
+        const auto start = std::chrono::steady_clock::now();
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1024),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              std::uint64_t local = 0;
+                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                                  float t = 0.0f;
+                                  std::uint32_t tri = 0;
+                                  local += scene.intersect_fast(rays[i], t, tri) ? 1 : 0;
+                              }
+                              hits.fetch_add(local, std::memory_order_relaxed);
+                          });
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        result.seconds = std::min(result.seconds, seconds);
+        result.hits = hits.load();
+    }
+    result.rays_per_second =
+        result.seconds > 0.0 ? static_cast<double>(result.rays) / result.seconds : 0.0;
+    return result;
+}
+
+} // namespace lfprobe

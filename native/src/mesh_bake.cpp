@@ -1,0 +1,177 @@
+#include "lfprobe/mesh_bake.hpp"
+
+#include <chrono>
+#include <filesystem>
+#include <limits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "lfprobe/error.hpp"
+#include "lfprobe/octahedral.hpp"
+#include "lfprobe/probe_exr.hpp"
+
+namespace lfprobe {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+void check_settings(const MeshBakeSettings& s) {
+    if (s.resolution < 1 || s.resolution > 16384) {
+        throw InputError("mesh bake: resolution must be in [1, 16384], got " +
+                         std::to_string(s.resolution));
+    }
+    if (s.supersample < 1 || s.supersample > 16) {
+        throw InputError("mesh bake: supersample must be in [1, 16], got " +
+                         std::to_string(s.supersample));
+    }
+}
+
+} // namespace
+
+ProbeMap bake_probe_from_mesh(const EmbreeScene& scene, const glm::dvec3& position,
+                              const MeshBakeSettings& settings, Progress* progress) {
+    check_settings(settings);
+    const int n = settings.resolution;
+    const int ss = settings.supersample;
+    ProbeMap map(n, position);
+    if (progress != nullptr) {
+        progress->begin_stage("baking probe from mesh", static_cast<std::uint64_t>(n));
+    }
+    tbb::parallel_for(tbb::blocked_range<int>(0, n), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y < rows.end(); ++y) {
+            if (progress != nullptr) {
+                progress->throw_if_cancelled();
+            }
+            for (int x = 0; x < n; ++x) {
+                const oct::Texel texel{x, y};
+                const std::size_t i = oct::texel_index(texel, n);
+                Ray ray;
+                ray.origin = position;
+                ray.direction = glm::dvec3(oct::texel_direction(texel, n));
+                const MeshHit centre = scene.intersect(ray);
+                if (!centre.hit) {
+                    map.set_empty(i);
+                    continue;
+                }
+                glm::vec3 colour = centre.base_color;
+                if (ss > 1) {
+                    glm::vec3 sum{0.0f};
+                    int hits = 0;
+                    for (int sy = 0; sy < ss; ++sy) {
+                        for (int sx = 0; sx < ss; ++sx) {
+                            const glm::vec2 uv{
+                                (static_cast<float>(x) +
+                                 (static_cast<float>(sx) + 0.5f) / static_cast<float>(ss)) /
+                                    static_cast<float>(n),
+                                (static_cast<float>(y) +
+                                 (static_cast<float>(sy) + 0.5f) / static_cast<float>(ss)) /
+                                    static_cast<float>(n)};
+                            Ray sub = ray;
+                            sub.direction = glm::dvec3(oct::decode(uv));
+                            const MeshHit h = scene.intersect(sub);
+                            if (h.hit) {
+                                sum += h.base_color;
+                                ++hits;
+                            }
+                        }
+                    }
+                    // The centre ray hit, so at least one sample did (odd ss) or nearly so;
+                    // keep the centre colour when every sample slipped past an edge.
+                    if (hits > 0) {
+                        colour = sum / static_cast<float>(hits);
+                    }
+                }
+                const glm::vec3 normal = EmbreeScene::facing(centre.shading_normal, ray.direction);
+                map.set_surface(i, static_cast<float>(centre.t), colour, normal, 1.0f);
+            }
+            if (progress != nullptr) {
+                progress->advance(1);
+            }
+        }
+    });
+    return map;
+}
+
+BakeSummary bake_probe_set_from_mesh(const EmbreeScene& scene, const ProbePlacement& placement,
+                                     const MeshBakeSettings& settings, const std::string& folder,
+                                     const nlohmann::json& sources, Progress* progress) {
+    check_settings(settings);
+    if (placement.positions.empty()) {
+        throw InputError("mesh bake: no probe positions given");
+    }
+    if (scene.mesh().triangle_count() == 0) {
+        throw InputError("mesh bake: the mesh has no triangles");
+    }
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (ec) {
+        throw IoError(folder + ": cannot create the probe set folder (" + ec.message() + ")");
+    }
+    BakeSummary summary;
+    summary.folder = folder;
+    ProbeSetManifest manifest;
+    manifest.world_offset = scene.mesh().world_offset;
+    manifest.placement = placement;
+    manifest.bake = nlohmann::json{{"source", "mesh"},
+                                   {"mesh", scene.mesh().path},
+                                   {"triangles", scene.mesh().triangle_count()},
+                                   {"resolution", settings.resolution},
+                                   {"supersample", settings.supersample},
+                                   {"normals", "shading normal if present, else geometric; "
+                                               "turned to face the probe"}};
+    manifest.sources = sources;
+    // As in the cloud bake: an earlier set's manifest goes first so that a folder never
+    // describes a mix of old and new probes, and stale temporaries of a killed bake go too.
+    fs::remove(fs::path(folder) / kManifestName, ec);
+    for (const auto& entry : fs::directory_iterator(folder, ec)) {
+        const std::string name = entry.path().filename().string();
+        if ((name.rfind("probe_", 0) == 0 || name.rfind(kManifestName, 0) == 0) &&
+            name.find(".tmp.") != std::string::npos) {
+            std::error_code ignored;
+            fs::remove(entry.path(), ignored);
+        }
+    }
+    for (std::size_t i = 0; i < placement.positions.size(); ++i) {
+        if (progress != nullptr) {
+            progress->throw_if_cancelled();
+        }
+        auto start = std::chrono::steady_clock::now();
+        ProbeMap map = bake_probe_from_mesh(scene, placement.positions[i], settings, progress);
+        summary.bake_seconds += seconds_since(start);
+        start = std::chrono::steady_clock::now();
+        if (progress != nullptr) {
+            progress->begin_stage("writing probe " + std::to_string(i + 1) + " of " +
+                                      std::to_string(placement.positions.size()),
+                                  1);
+        }
+        const std::string file = probe_file_name(i);
+        const std::string path = (fs::path(folder) / file).string();
+        write_probe_exr(path, map);
+        summary.write_seconds += seconds_since(start);
+        ProbeRecord record{file, placement.positions[i], map.resolution, coverage_of(map),
+                           map.memory_bytes()};
+        summary.mean_coverage.surface += record.coverage.surface;
+        summary.mean_coverage.inferred += record.coverage.inferred;
+        summary.mean_coverage.empty += record.coverage.empty;
+        summary.mean_coverage.unknown += record.coverage.unknown;
+        summary.bytes_in_memory_per_probe = map.memory_bytes();
+        summary.bytes_on_disk += static_cast<std::size_t>(fs::file_size(path));
+        manifest.probes.push_back(std::move(record));
+    }
+    write_manifest(folder, manifest);
+    const double count = static_cast<double>(manifest.probes.size());
+    summary.probe_count = manifest.probes.size();
+    summary.mean_coverage.surface /= count;
+    summary.mean_coverage.inferred /= count;
+    summary.mean_coverage.empty /= count;
+    summary.mean_coverage.unknown /= count;
+    return summary;
+}
+
+} // namespace lfprobe

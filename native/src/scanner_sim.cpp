@@ -1,0 +1,168 @@
+#include "lfprobe/scanner_sim.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "lfprobe/color.hpp"
+#include "lfprobe/error.hpp"
+#include "lfprobe/probe_exr.hpp"
+
+namespace lfprobe {
+
+namespace {
+
+// SplitMix64: a counter-based generator, so that each ray's noise is independent of the
+// order (and the threads) in which rays are traced.
+std::uint64_t splitmix(std::uint64_t x) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+}
+
+double unit_uniform(std::uint64_t bits) {
+    // 53 random bits in (0, 1): never 0, so the logarithm below is finite.
+    return (static_cast<double>(bits >> 11) + 0.5) * (1.0 / 9007199254740992.0);
+}
+
+// Standard normal sample for ray k (Box–Muller).
+double gaussian(std::uint64_t seed, std::uint64_t k) {
+    const std::uint64_t a = splitmix(seed * 0x100000001B3ull ^ splitmix(2 * k));
+    const std::uint64_t b = splitmix(a ^ splitmix(2 * k + 1));
+    const double u1 = unit_uniform(a);
+    const double u2 = unit_uniform(b);
+    return std::sqrt(-2.0 * std::log(u1)) * std::cos(2.0 * std::numbers::pi * u2);
+}
+
+struct Pattern {
+    int azimuths = 0;
+    int elevations = 0; // rows below the zenith
+    double step = 0.0;  // radians
+    double elevation_min = 0.0;
+    [[nodiscard]] std::uint64_t rays() const {
+        return static_cast<std::uint64_t>(azimuths) * static_cast<std::uint64_t>(elevations) + 1;
+    }
+};
+
+Pattern pattern_of(const ScannerSettings& s) {
+    if (!(s.step_deg > 0.0) || s.step_deg > 90.0) {
+        throw InputError("scan: step_deg must be in (0, 90], got " + std::to_string(s.step_deg));
+    }
+    if (!(s.vertical_fov_deg > 0.0) || s.vertical_fov_deg > 360.0) {
+        throw InputError("scan: vertical_fov must be in (0, 360], got " +
+                         std::to_string(s.vertical_fov_deg));
+    }
+    if (!(s.noise_mm >= 0.0)) {
+        throw InputError("scan: noise_mm must be at least 0");
+    }
+    Pattern p;
+    const double deg = std::numbers::pi / 180.0;
+    p.step = s.step_deg * deg;
+    p.azimuths = std::max(1, static_cast<int>(std::lround(360.0 / s.step_deg)));
+    const double span = std::min(180.0, s.vertical_fov_deg / 2.0); // from the zenith down
+    p.elevation_min = (90.0 - span) * deg;
+    // Rows strictly below the zenith: j·step < span (the row at j·step = span is the zenith).
+    p.elevations = static_cast<int>(std::floor(span / s.step_deg - 1e-9)) + 1;
+    if (p.elevations > 200000 || static_cast<double>(p.azimuths) * p.elevations > 5.0e8) {
+        throw InputError("scan: step_deg gives too many rays");
+    }
+    return p;
+}
+
+} // namespace
+
+std::vector<SimulatedPoint> simulate_scan(const EmbreeScene& scene, const ScannerSettings& settings,
+                                          Progress* progress, ScanStats* stats) {
+    const Pattern p = pattern_of(settings);
+    const glm::dvec3 local_origin = settings.position - scene.mesh().world_offset;
+    const double sigma_per_metre = settings.noise_mm * 1e-3 / 10.0;
+    // Row j < elevations: elevation_min + j·step; row `elevations` is the zenith (one ray).
+    const int rows = p.elevations + 1;
+    std::vector<std::vector<SimulatedPoint>> per_row(static_cast<std::size_t>(rows));
+    if (progress != nullptr) {
+        progress->begin_stage("scanning", static_cast<std::uint64_t>(rows));
+    }
+    const auto start = std::chrono::steady_clock::now();
+    tbb::parallel_for(tbb::blocked_range<int>(0, rows), [&](const tbb::blocked_range<int>& r) {
+        for (int j = r.begin(); j < r.end(); ++j) {
+            if (progress != nullptr) {
+                progress->throw_if_cancelled();
+            }
+            const bool zenith = j == p.elevations;
+            const double elevation = zenith ? std::numbers::pi / 2.0 : p.elevation_min + j * p.step;
+            const int count = zenith ? 1 : p.azimuths;
+            auto& out = per_row[static_cast<std::size_t>(j)];
+            for (int k = 0; k < count; ++k) {
+                const double azimuth = k * p.step;
+                Ray ray;
+                ray.origin = local_origin;
+                ray.direction = zenith ? glm::dvec3(0.0, 0.0, 1.0)
+                                       : glm::dvec3(std::cos(elevation) * std::cos(azimuth),
+                                                    std::cos(elevation) * std::sin(azimuth),
+                                                    std::sin(elevation));
+                ray.t_max = settings.max_range;
+                const MeshHit h = scene.intersect(ray);
+                if (!h.hit) {
+                    continue;
+                }
+                const std::uint64_t index =
+                    static_cast<std::uint64_t>(j) * static_cast<std::uint64_t>(p.azimuths) +
+                    static_cast<std::uint64_t>(k);
+                const double range = h.t + sigma_per_metre * h.t * gaussian(settings.seed, index);
+                out.push_back(
+                    SimulatedPoint{settings.position + range * ray.direction, h.base_color});
+            }
+            if (progress != nullptr) {
+                progress->advance(1);
+            }
+        }
+    });
+    std::vector<SimulatedPoint> points;
+    for (auto& row : per_row) {
+        points.insert(points.end(), row.begin(), row.end());
+    }
+    if (stats != nullptr) {
+        stats->rays = p.rays();
+        stats->points = points.size();
+        stats->seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    }
+    return points;
+}
+
+ScanStats write_simulated_scan(const EmbreeScene& scene, const ScannerSettings& settings,
+                               const std::string& path, Progress* progress) {
+    ScanStats stats;
+    const std::vector<SimulatedPoint> points = simulate_scan(scene, settings, progress, &stats);
+    std::string text;
+    text.reserve(points.size() * 48 + 256);
+    char line[256];
+    std::snprintf(line, sizeof line, "# scanner %.6f %.6f %.6f\n", settings.position.x,
+                  settings.position.y, settings.position.z);
+    text += line;
+    std::snprintf(line, sizeof line,
+                  "# lfprobe simulated scan: step %g deg, vertical fov %g deg, noise %g mm at "
+                  "10 m, seed %llu\n",
+                  settings.step_deg, settings.vertical_fov_deg, settings.noise_mm,
+                  static_cast<unsigned long long>(settings.seed));
+    text += line;
+    auto byte = [](float linear) {
+        const float s = linear_to_srgb(std::clamp(linear, 0.0f, 1.0f));
+        return static_cast<int>(std::lround(s * 255.0f));
+    };
+    for (const SimulatedPoint& q : points) {
+        std::snprintf(line, sizeof line, "%.6f %.6f %.6f %d %d %d\n", q.position.x, q.position.y,
+                      q.position.z, byte(q.color.x), byte(q.color.y), byte(q.color.z));
+        text += line;
+    }
+    write_file_atomically(path, text);
+    return stats;
+}
+
+} // namespace lfprobe

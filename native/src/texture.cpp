@@ -1,0 +1,77 @@
+#include "lfprobe/texture.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <memory>
+
+#include <stb_image.h>
+
+#include "lfprobe/color.hpp"
+#include "lfprobe/error.hpp"
+
+namespace lfprobe {
+
+Texture Texture::load(const std::string& path) {
+    if (!std::filesystem::exists(path)) {
+        throw IoError(path + ": texture file not found");
+    }
+    int w = 0;
+    int h = 0;
+    int channels = 0;
+    // Always ask for 3 channels: only the base colour is used, alpha is ignored.
+    std::unique_ptr<stbi_uc, void (*)(void*)> pixels(stbi_load(path.c_str(), &w, &h, &channels, 3),
+                                                     stbi_image_free);
+    if (!pixels || w < 1 || h < 1) {
+        const char* reason = stbi_failure_reason();
+        throw InputError(path + ": expected a PNG or JPG texture (" +
+                         (reason != nullptr ? reason : "unreadable") + ")");
+    }
+    Texture t;
+    t.path = path;
+    t.width = w;
+    t.height = h;
+    const std::size_t n = static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 3;
+    t.rgb.resize(n);
+    const auto& table = srgb8_to_linear_table();
+    for (std::size_t i = 0; i < n; ++i) {
+        t.rgb[i] = table[pixels.get()[i]];
+    }
+    return t;
+}
+
+glm::vec3 Texture::texel(int x, int y) const {
+    const std::size_t i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                           static_cast<std::size_t>(x)) *
+                          3;
+    return {rgb[i], rgb[i + 1], rgb[i + 2]};
+}
+
+glm::vec3 Texture::sample(const glm::vec2& uv) const {
+    if (width < 1 || height < 1) {
+        return glm::vec3(1.0f);
+    }
+    // Continuous texel coordinates with texel centres on integers; v is flipped because OBJ
+    // texture coordinates have v up while image rows go down.
+    const double fx = static_cast<double>(uv.x) * width - 0.5;
+    const double fy = (1.0 - static_cast<double>(uv.y)) * height - 0.5;
+    if (!std::isfinite(fx) || !std::isfinite(fy)) {
+        return glm::vec3(0.0f);
+    }
+    const double x0f = std::floor(fx);
+    const double y0f = std::floor(fy);
+    const auto ax = static_cast<float>(fx - x0f);
+    const auto ay = static_cast<float>(fy - y0f);
+    auto wrap = [](double i, int n) {
+        const double m = std::fmod(i, static_cast<double>(n));
+        return static_cast<int>(m < 0.0 ? m + n : m);
+    };
+    const int x0 = wrap(x0f, width);
+    const int x1 = wrap(x0f + 1.0, width);
+    const int y0 = wrap(y0f, height);
+    const int y1 = wrap(y0f + 1.0, height);
+    const glm::vec3 top = texel(x0, y0) * (1.0f - ax) + texel(x1, y0) * ax;
+    const glm::vec3 bottom = texel(x0, y1) * (1.0f - ax) + texel(x1, y1) * ax;
+    return top * (1.0f - ay) + bottom * ay;
+}
+
+} // namespace lfprobe

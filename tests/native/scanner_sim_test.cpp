@@ -1,0 +1,97 @@
+// The simulated scanner: ray count of the pattern, points on the mesh within the noise, and a
+// file the scan reader takes back with its scanner position.
+#include <cmath>
+#include <filesystem>
+#include <numbers>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "lfprobe/mesh_reader.hpp"
+#include "lfprobe/scan_reader.hpp"
+#include "lfprobe/scanner_sim.hpp"
+
+namespace lfprobe {
+namespace {
+
+// A closed box room [-2,2] × [-3,3] × [0,2.5] as a mesh, shifted by a world offset.
+Mesh closed_room() {
+    Mesh m;
+    m.vertices = {{-2, -3, 0},   {2, -3, 0},   {2, 3, 0},   {-2, 3, 0},
+                  {-2, -3, 2.5}, {2, -3, 2.5}, {2, 3, 2.5}, {-2, 3, 2.5}};
+    const std::uint32_t quads[6][4] = {{0, 1, 2, 3}, {4, 7, 6, 5}, {0, 4, 5, 1},
+                                       {3, 2, 6, 7}, {0, 3, 7, 4}, {1, 5, 6, 2}};
+    for (const auto& q : quads) {
+        m.triangles.push_back({q[0], q[1], q[2]});
+        m.triangles.push_back({q[0], q[2], q[3]});
+    }
+    m.materials.push_back(Material{"red", glm::vec3(1.0f, 0.0f, 0.0f), nullptr});
+    m.object_names.push_back("room");
+    m.material.assign(m.triangles.size(), 0);
+    m.object.assign(m.triangles.size(), 0);
+    return m;
+}
+
+double distance_to_room(const glm::dvec3& p) {
+    // Distance from a point near the boundary to the nearest of the six planes.
+    return std::min({std::abs(p.x + 2), std::abs(p.x - 2), std::abs(p.y + 3), std::abs(p.y - 3),
+                     std::abs(p.z), std::abs(p.z - 2.5)});
+}
+
+TEST(Scanner, PatternCountNoiseAndRoundTrip) {
+    const Mesh mesh = closed_room();
+    const EmbreeScene scene(mesh);
+    ScannerSettings s;
+    s.position = {0.5, 0.5, 1.5};
+    s.step_deg = 2.0;
+    s.noise_mm = 2.0;
+    ScanStats stats;
+    const std::vector<SimulatedPoint> points = simulate_scan(scene, s, nullptr, &stats);
+    // 180 azimuths × 75 rows (−60° .. 88°) + the zenith; a closed room returns every ray.
+    EXPECT_EQ(stats.rays, 180u * 75u + 1u);
+    EXPECT_EQ(points.size(), stats.rays);
+    double max_off = 0.0;
+    for (const SimulatedPoint& p : points) {
+        const double range = glm::length(p.position - s.position);
+        const double sigma = 2e-3 * range / 10.0;
+        EXPECT_LT(distance_to_room(p.position), 6.0 * sigma + 1e-9);
+        max_off = std::max(max_off, distance_to_room(p.position));
+    }
+    EXPECT_GT(max_off, 0.0); // the noise is there
+    // Nothing below −60° elevation.
+    for (const SimulatedPoint& p : points) {
+        const glm::dvec3 d = p.position - s.position;
+        EXPECT_GE(std::asin(d.z / glm::length(d)), -60.0 * std::numbers::pi / 180.0 - 1e-6);
+    }
+    // Deterministic for a seed.
+    EXPECT_EQ(simulate_scan(scene, s)[1234].position, points[1234].position);
+
+    const auto path =
+        (std::filesystem::temp_directory_path() / "lfprobe_scanner_test.xyz").string();
+    const ScanStats written = write_simulated_scan(scene, s, path);
+    EXPECT_EQ(written.points, points.size());
+    const ScanFile file = read_scan_file(path, {});
+    ASSERT_EQ(file.positions.size(), points.size());
+    ASSERT_TRUE(file.has_scanner);
+    EXPECT_NEAR(file.scanner.x, 0.5, 1e-9);
+    EXPECT_NEAR(file.scanner.z, 1.5, 1e-9);
+    ASSERT_FALSE(file.colors.empty());
+    EXPECT_NEAR(file.colors[0].x, 1.0f, 1e-6f);
+    EXPECT_NEAR(file.colors[0].y, 0.0f, 1e-6f);
+    const glm::dvec3 p0 = file.origin + glm::dvec3(file.positions[0]);
+    EXPECT_NEAR(glm::length(p0 - points[0].position), 0.0, 1e-5);
+}
+
+TEST(Scanner, RejectsBadSettings) {
+    const Mesh mesh = closed_room();
+    const EmbreeScene scene(mesh);
+    ScannerSettings s;
+    s.step_deg = 0.0;
+    EXPECT_THROW((void)simulate_scan(scene, s), InputError);
+    s.step_deg = 1.0;
+    s.vertical_fov_deg = 400.0;
+    EXPECT_THROW((void)simulate_scan(scene, s), InputError);
+}
+
+} // namespace
+} // namespace lfprobe
