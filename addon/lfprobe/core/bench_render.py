@@ -1,6 +1,7 @@
 """`lfprobe bench render`: probe tracing against splatting the raw cloud, same camera, same
-run. Prints rays per second on 1 and 2 threads, texels visited per ray, and milliseconds per
-frame of the splat baseline for growing clouds (tracing does not depend on the cloud's size:
+run. Prints rays per second on 1 and 2 threads, texels visited per ray, the ratio to Embree's
+primary-ray throughput on the room's mesh for the same rays, and milliseconds per frame of the
+splat baseline for growing clouds (tracing does not depend on the cloud's size:
 the probes hold a fixed number of texels)."""
 
 from __future__ import annotations
@@ -13,7 +14,7 @@ import tempfile
 import time
 
 from . import native
-from .bench import room_cloud, room_surface_area
+from .bench import room_cloud, room_surface_area, write_room_obj
 from .camera_json import camera_dict
 
 PROBES = {"min": [0.75, 1.0, 1.4], "max": [2.25, 5.0, 1.4], "counts": [2, 3, 1]}
@@ -62,7 +63,10 @@ def main(args) -> int:
             print(f"  bake (normals, spacing, {PROBES['counts'][0] * PROBES['counts'][1] * PROBES['counts'][2]} probes): {bake_seconds:.1f} s")
             field = _native.ProbeField.load(folder)
             if n == sizes[0]:
-                print("  probe tracing (grid walk), best of 3:")
+                room_obj = os.path.join(tmp, "room.obj")
+                write_room_obj(room_obj)
+                mesh = _native.load_mesh(room_obj)
+                print("  probe tracing (grid walk), best of 3; Embree on the room's mesh, same rays:")
                 for name, camera in views.items():
                     text = json.dumps(camera)
                     one = _best_render(field, text, 1)
@@ -78,13 +82,18 @@ def main(args) -> int:
                         "hit_rate": two["hits"] / two["rays"],
                         "unknown_rate": two["unknown"] / two["rays"],
                     }
+                    embree = _native.embree_throughput(mesh, text, threads=2, repeats=3)
+                    row["embree_rays_per_second_2_threads"] = embree["rays_per_second"]
+                    row["trace_over_embree"] = two["rays_per_second"] / embree["rays_per_second"]
                     results["trace"].append(row)
                     print(
                         f"  {name}: {row['rays']:,} rays; {row['rays_per_second_1_thread'] / 1e6:.2f} M "
                         f"rays/s on 1 thread, {row['rays_per_second_2_threads'] / 1e6:.2f} M on 2 "
                         f"({row['ms_per_frame_2_threads']:.1f} ms/frame); {row['texels_per_ray']:.1f} "
                         f"texels and {row['probes_per_ray']:.2f} probes per ray; HIT "
-                        f"{100 * row['hit_rate']:.1f}%, UNKNOWN {100 * row['unknown_rate']:.1f}%"
+                        f"{100 * row['hit_rate']:.1f}%, UNKNOWN {100 * row['unknown_rate']:.1f}%\n"
+                        f"    Embree {row['embree_rays_per_second_2_threads'] / 1e6:.2f} M rays/s on 2 "
+                        f"threads: probe trace / Embree = {row['trace_over_embree']:.3f}"
                     )
             text = json.dumps(views["between probes"])
             trace = _best_render(field, text, 2)
@@ -116,8 +125,6 @@ def main(args) -> int:
         print("summary: points, probe trace ms/frame, splat ms/frame")
         for row in results["sizes"]:
             print(f"  {row['points']:>12,}  {row['trace_ms_per_frame']:8.1f}  {row['splat_ms_per_frame']:8.1f}")
-        print("Embree's primary-ray throughput on the reference mesh: not measured yet (the ground "
-              "truth renderer arrives with the ground-truth issue).")
         if args.json:
             with open(args.json, "w", encoding="utf-8") as out:
                 json.dump(results, out, indent=2)
