@@ -8,6 +8,7 @@
 #include <pybind11/stl.h>
 #include <tbb/task_arena.h>
 
+#include "binding_helpers.hpp"
 #include "bindings.hpp"
 #include "job.hpp"
 #include "lfprobe/camera.hpp"
@@ -44,27 +45,6 @@ MeshHandle resolve(const MeshArg& arg) {
         return *handle;
     }
     return load_mesh(std::get<std::string>(arg));
-}
-
-template <class F>
-auto on_threads(int threads, F&& work) {
-    if (threads <= 0) {
-        return work();
-    }
-    tbb::task_arena arena(threads);
-    return arena.execute(std::forward<F>(work));
-}
-
-Camera camera_from(const std::string& camera) {
-    const auto first = camera.find_first_not_of(" \t\r\n");
-    if (first != std::string::npos && camera[first] == '{') {
-        try {
-            return Camera::from_json(nlohmann::json::parse(camera), "camera JSON");
-        } catch (const nlohmann::json::exception& e) {
-            throw InputError(std::string("camera JSON: ") + e.what());
-        }
-    }
-    return read_camera_json(camera);
 }
 
 glm::dvec3 dvec3_of(const std::vector<double>& v, const char* what) {

@@ -9,6 +9,7 @@
 #include <pybind11/stl.h>
 #include <tbb/task_arena.h>
 
+#include "binding_helpers.hpp"
 #include "bindings.hpp"
 #include "job.hpp"
 #include "lfprobe/camera.hpp"
@@ -24,29 +25,6 @@ namespace py = pybind11;
 namespace lfprobe::python {
 
 namespace {
-
-// Runs `work` on `threads` cores (all when 0): the output does not depend on it, the time does.
-template <class F>
-auto on_threads(int threads, F&& work) {
-    if (threads <= 0) {
-        return work();
-    }
-    tbb::task_arena arena(threads);
-    return arena.execute(std::forward<F>(work));
-}
-
-Camera camera_from(const std::string& camera) {
-    // A path, or the JSON text itself (starts with '{').
-    const auto first = camera.find_first_not_of(" \t\r\n");
-    if (first != std::string::npos && camera[first] == '{') {
-        try {
-            return Camera::from_json(nlohmann::json::parse(camera), "camera JSON");
-        } catch (const nlohmann::json::exception& e) {
-            throw InputError(std::string("camera JSON: ") + e.what());
-        }
-    }
-    return read_camera_json(camera);
-}
 
 py::dict render_stats_dict(const RenderStats& s) {
     py::dict d;

@@ -1,7 +1,5 @@
 #include "lfprobe/mesh_bake.hpp"
 
-#include <chrono>
-#include <filesystem>
 #include <limits>
 
 #include <tbb/blocked_range.h>
@@ -10,16 +8,11 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/octahedral.hpp"
 #include "lfprobe/probe_exr.hpp"
+#include "lfprobe/probe_set.hpp"
 
 namespace lfprobe {
 
-namespace fs = std::filesystem;
-
 namespace {
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-}
 
 void check_settings(const MeshBakeSettings& s) {
     if (s.resolution < 1 || s.resolution > 16384) {
@@ -108,13 +101,6 @@ BakeSummary bake_probe_set_from_mesh(const EmbreeScene& scene, const ProbePlacem
     if (scene.mesh().triangle_count() == 0) {
         throw InputError("mesh bake: the mesh has no triangles");
     }
-    std::error_code ec;
-    fs::create_directories(folder, ec);
-    if (ec) {
-        throw IoError(folder + ": cannot create the probe set folder (" + ec.message() + ")");
-    }
-    BakeSummary summary;
-    summary.folder = folder;
     ProbeSetManifest manifest;
     manifest.world_offset = scene.mesh().world_offset;
     manifest.placement = placement;
@@ -126,52 +112,12 @@ BakeSummary bake_probe_set_from_mesh(const EmbreeScene& scene, const ProbePlacem
                                    {"normals", "shading normal if present, else geometric; "
                                                "turned to face the probe"}};
     manifest.sources = sources;
-    // As in the cloud bake: an earlier set's manifest goes first so that a folder never
-    // describes a mix of old and new probes, and stale temporaries of a killed bake go too.
-    fs::remove(fs::path(folder) / kManifestName, ec);
-    for (const auto& entry : fs::directory_iterator(folder, ec)) {
-        const std::string name = entry.path().filename().string();
-        if ((name.rfind("probe_", 0) == 0 || name.rfind(kManifestName, 0) == 0) &&
-            name.find(".tmp.") != std::string::npos) {
-            std::error_code ignored;
-            fs::remove(entry.path(), ignored);
-        }
-    }
-    for (std::size_t i = 0; i < placement.positions.size(); ++i) {
-        if (progress != nullptr) {
-            progress->throw_if_cancelled();
-        }
-        auto start = std::chrono::steady_clock::now();
-        ProbeMap map = bake_probe_from_mesh(scene, placement.positions[i], settings, progress);
-        summary.bake_seconds += seconds_since(start);
-        start = std::chrono::steady_clock::now();
-        if (progress != nullptr) {
-            progress->begin_stage("writing probe " + std::to_string(i + 1) + " of " +
-                                      std::to_string(placement.positions.size()),
-                                  1);
-        }
-        const std::string file = probe_file_name(i);
-        const std::string path = (fs::path(folder) / file).string();
-        write_probe_exr(path, map);
-        summary.write_seconds += seconds_since(start);
-        ProbeRecord record{file, placement.positions[i], map.resolution, coverage_of(map),
-                           map.memory_bytes()};
-        summary.mean_coverage.surface += record.coverage.surface;
-        summary.mean_coverage.inferred += record.coverage.inferred;
-        summary.mean_coverage.empty += record.coverage.empty;
-        summary.mean_coverage.unknown += record.coverage.unknown;
-        summary.bytes_in_memory_per_probe = map.memory_bytes();
-        summary.bytes_on_disk += static_cast<std::size_t>(fs::file_size(path));
-        manifest.probes.push_back(std::move(record));
-    }
-    write_manifest(folder, manifest);
-    const double count = static_cast<double>(manifest.probes.size());
-    summary.probe_count = manifest.probes.size();
-    summary.mean_coverage.surface /= count;
-    summary.mean_coverage.inferred /= count;
-    summary.mean_coverage.empty /= count;
-    summary.mean_coverage.unknown /= count;
-    return summary;
+    return write_probe_set(
+        folder, std::move(manifest),
+        [&](std::size_t i) {
+            return bake_probe_from_mesh(scene, placement.positions[i], settings, progress);
+        },
+        progress);
 }
 
 } // namespace lfprobe

@@ -187,65 +187,44 @@ ProbeMap read_probe(const std::string& folder, const ProbeSetManifest& manifest,
     return map;
 }
 
-BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,
-                                      const BakeSettings& settings,
-                                      const LocalGeometryOptions& geometry_options,
-                                      const std::string& folder, const json& sources,
-                                      Progress* progress) {
-    if (placement.positions.empty()) {
+BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest,
+                            const std::function<ProbeMap(std::size_t)>& bake_one,
+                            Progress* progress) {
+    const std::vector<glm::dvec3>& positions = manifest.placement.positions;
+    if (positions.empty()) {
         throw InputError("bake: no probe positions given");
-    }
-    if (cloud.size() == 0) {
-        throw InputError("bake: the point cloud is empty");
     }
     std::error_code ec;
     fs::create_directories(folder, ec);
     if (ec) {
         throw IoError(folder + ": cannot create the probe set folder (" + ec.message() + ")");
     }
-    BakeSummary summary;
-    summary.folder = folder;
-    auto start = std::chrono::steady_clock::now();
-    const LocalGeometry geometry = estimate_local_geometry(cloud, geometry_options, progress);
-    summary.normals_seconds = seconds_since(start);
-
-    ProbeSetManifest manifest;
-    manifest.world_offset = cloud.world_offset;
-    manifest.placement = placement;
-    manifest.bake = json{{"source", "point cloud"},
-                         {"resolution", settings.resolution},
-                         {"splat_scale", settings.splat_scale},
-                         {"max_splat_radius_texels", settings.max_splat_radius_texels},
-                         {"hole_fill_texels", settings.hole_fill_texels},
-                         {"min_distance", settings.min_distance},
-                         {"normal_neighbours", geometry_options.normal_neighbours},
-                         {"spacing_neighbours", geometry_options.spacing_neighbours},
-                         {"points", cloud.size()}};
-    manifest.sources = sources;
     // Files of an earlier set in this folder would be mixed with the new ones: the manifest
     // goes first, and comes back only once every probe is written. Temporary files that a
     // killed bake left behind go too.
     fs::remove(fs::path(folder) / kManifestName, ec);
     remove_stale_temporaries(folder);
-    for (std::size_t i = 0; i < placement.positions.size(); ++i) {
+    BakeSummary summary;
+    summary.folder = folder;
+    manifest.probes.clear();
+    for (std::size_t i = 0; i < positions.size(); ++i) {
         if (progress != nullptr) {
             progress->throw_if_cancelled();
         }
-        start = std::chrono::steady_clock::now();
-        ProbeMap map =
-            bake_probe_from_cloud(cloud, geometry, placement.positions[i], settings, progress);
+        auto start = std::chrono::steady_clock::now();
+        ProbeMap map = bake_one(i);
         summary.bake_seconds += seconds_since(start);
         start = std::chrono::steady_clock::now();
         if (progress != nullptr) {
             progress->begin_stage("writing probe " + std::to_string(i + 1) + " of " +
-                                      std::to_string(placement.positions.size()),
+                                      std::to_string(positions.size()),
                                   1);
         }
         const std::string file = probe_file_name(i);
         const std::string path = (fs::path(folder) / file).string();
         write_probe_exr(path, map);
         summary.write_seconds += seconds_since(start);
-        ProbeRecord record{file, placement.positions[i], map.resolution, coverage_of(map),
+        ProbeRecord record{file, positions[i], map.resolution, coverage_of(map),
                            map.memory_bytes()};
         summary.mean_coverage.surface += record.coverage.surface;
         summary.mean_coverage.inferred += record.coverage.inferred;
@@ -262,6 +241,45 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
     summary.mean_coverage.inferred /= count;
     summary.mean_coverage.empty /= count;
     summary.mean_coverage.unknown /= count;
+    return summary;
+}
+
+BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,
+                                      const BakeSettings& settings,
+                                      const LocalGeometryOptions& geometry_options,
+                                      const std::string& folder, const json& sources,
+                                      Progress* progress) {
+    if (placement.positions.empty()) {
+        throw InputError("bake: no probe positions given");
+    }
+    if (cloud.size() == 0) {
+        throw InputError("bake: the point cloud is empty");
+    }
+    const auto start = std::chrono::steady_clock::now();
+    const LocalGeometry geometry = estimate_local_geometry(cloud, geometry_options, progress);
+    const double normals_seconds = seconds_since(start);
+
+    ProbeSetManifest manifest;
+    manifest.world_offset = cloud.world_offset;
+    manifest.placement = placement;
+    manifest.bake = json{{"source", "point cloud"},
+                         {"resolution", settings.resolution},
+                         {"splat_scale", settings.splat_scale},
+                         {"max_splat_radius_texels", settings.max_splat_radius_texels},
+                         {"hole_fill_texels", settings.hole_fill_texels},
+                         {"min_distance", settings.min_distance},
+                         {"normal_neighbours", geometry_options.normal_neighbours},
+                         {"spacing_neighbours", geometry_options.spacing_neighbours},
+                         {"points", cloud.size()}};
+    manifest.sources = sources;
+    BakeSummary summary = write_probe_set(
+        folder, std::move(manifest),
+        [&](std::size_t i) {
+            return bake_probe_from_cloud(cloud, geometry, placement.positions[i], settings,
+                                         progress);
+        },
+        progress);
+    summary.normals_seconds = normals_seconds;
     return summary;
 }
 

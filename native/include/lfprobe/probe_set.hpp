@@ -4,6 +4,7 @@
 // sources with their hashes. It is written last, so a folder without it is no probe set.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -59,6 +60,14 @@ struct BakeSummary {
     std::size_t bytes_in_memory_per_probe = 0;
     std::size_t bytes_on_disk = 0;
 };
+
+// The write path every bake shares: creates `folder`, removes an earlier manifest and the
+// temporaries of a killed bake, then bakes probe i with `bake_one(i)` and writes it atomically,
+// one probe at a time, and writes `manifest` (with the probe records added) last. Fills the
+// bake, write, coverage and byte figures of the returned summary.
+[[nodiscard]] BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest,
+                                          const std::function<ProbeMap(std::size_t)>& bake_one,
+                                          Progress* progress = nullptr);
 
 // Bakes every probe of `placement` from `cloud` into `folder` (created when missing), one probe
 // at a time so memory stays at one probe's maps, and writes the manifest last. `sources` goes

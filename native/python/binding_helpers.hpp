@@ -1,0 +1,38 @@
+// Small pieces that several bindings files share.
+#pragma once
+
+#include <string>
+#include <utility>
+
+#include <nlohmann/json.hpp>
+#include <tbb/task_arena.h>
+
+#include "lfprobe/camera.hpp"
+#include "lfprobe/error.hpp"
+
+namespace lfprobe::python {
+
+// Runs `work` on `threads` cores (all when 0): outputs do not depend on it, times do.
+template <class F>
+auto on_threads(int threads, F&& work) {
+    if (threads <= 0) {
+        return work();
+    }
+    tbb::task_arena arena(threads);
+    return arena.execute(std::forward<F>(work));
+}
+
+// A camera from a JSON file path, or from the JSON text itself (starts with '{').
+inline Camera camera_from(const std::string& camera) {
+    const auto first = camera.find_first_not_of(" \t\r\n");
+    if (first != std::string::npos && camera[first] == '{') {
+        try {
+            return Camera::from_json(nlohmann::json::parse(camera), "camera JSON");
+        } catch (const nlohmann::json::exception& e) {
+            throw InputError(std::string("camera JSON: ") + e.what());
+        }
+    }
+    return read_camera_json(camera);
+}
+
+} // namespace lfprobe::python
