@@ -47,22 +47,6 @@ MeshHandle resolve(const MeshArg& arg) {
     return load_mesh(std::get<std::string>(arg));
 }
 
-glm::dvec3 dvec3_of(const std::vector<double>& v, const char* what) {
-    if (v.size() != 3) {
-        throw InputError(std::string(what) + ": expected three numbers");
-    }
-    return {v[0], v[1], v[2]};
-}
-
-py::dict coverage_dict(const ProbeCoverage& c) {
-    py::dict d;
-    d["surface"] = c.surface;
-    d["inferred"] = c.inferred;
-    d["empty"] = c.empty;
-    d["unknown"] = c.unknown;
-    return d;
-}
-
 } // namespace
 
 void bind_mesh(py::module_& m) {
@@ -179,12 +163,12 @@ void bind_mesh(py::module_& m) {
                     throw InputError("bake: give probe positions or a grid, not both");
                 }
                 placement = ProbePlacement::from_grid(ProbeGrid::spanning(
-                    dvec3_of(*grid_min, "grid_min"), dvec3_of(*grid_max, "grid_max"),
+                    dvec3_from(*grid_min, "grid_min"), dvec3_from(*grid_max, "grid_max"),
                     {(*counts)[0], (*counts)[1], (*counts)[2]}));
             } else {
                 std::vector<glm::dvec3> local;
                 for (const auto& p : positions) {
-                    local.push_back(dvec3_of(p, "probe position"));
+                    local.push_back(dvec3_from(p, "probe position"));
                 }
                 placement = ProbePlacement::from_positions(std::move(local));
             }
@@ -229,7 +213,7 @@ void bind_mesh(py::module_& m) {
         [](MeshArg mesh, const std::string& out_path, const std::vector<double>& position,
            double step_deg, double noise_mm, double vertical_fov, std::uint64_t seed) {
             ScannerSettings s;
-            s.position = dvec3_of(position, "scanner position");
+            s.position = dvec3_from(position, "scanner position");
             s.step_deg = step_deg;
             s.noise_mm = noise_mm;
             s.vertical_fov_deg = vertical_fov;

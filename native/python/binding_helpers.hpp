@@ -4,11 +4,16 @@
 #include <string>
 #include <utility>
 
+#include <vector>
+
+#include <glm/vec3.hpp>
 #include <nlohmann/json.hpp>
+#include <pybind11/pybind11.h>
 #include <tbb/task_arena.h>
 
 #include "lfprobe/camera.hpp"
 #include "lfprobe/error.hpp"
+#include "lfprobe/probe_map.hpp"
 
 namespace lfprobe::python {
 
@@ -33,6 +38,23 @@ inline Camera camera_from(const std::string& camera) {
         }
     }
     return read_camera_json(camera);
+}
+
+// Three numbers from Python as a point; `what` names the argument in the error.
+inline glm::dvec3 dvec3_from(const std::vector<double>& v, const char* what) {
+    if (v.size() != 3) {
+        throw InputError(std::string(what) + ": expected three numbers (x, y, z)");
+    }
+    return {v[0], v[1], v[2]};
+}
+
+inline pybind11::dict coverage_dict(const ProbeCoverage& c) {
+    pybind11::dict d;
+    d["surface"] = c.surface;
+    d["inferred"] = c.inferred;
+    d["empty"] = c.empty;
+    d["unknown"] = c.unknown;
+    return d;
 }
 
 } // namespace lfprobe::python

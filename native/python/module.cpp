@@ -10,6 +10,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include "binding_helpers.hpp"
 #include "bindings.hpp"
 #include "job.hpp"
 #include "lfprobe/error.hpp"
@@ -22,6 +23,8 @@
 
 namespace py = pybind11;
 using namespace lfprobe;
+using lfprobe::python::coverage_dict;
+using lfprobe::python::dvec3_from;
 using lfprobe::python::Job;
 
 namespace {
@@ -52,22 +55,6 @@ std::vector<glm::vec3> vec3_from(const FloatArray& a, const char* what, py::ssiz
         std::memcpy(&out[0].x, a.data(), out.size() * sizeof(glm::vec3));
     }
     return out;
-}
-
-glm::dvec3 dvec3_from(const std::vector<double>& v, const char* what) {
-    if (v.size() != 3) {
-        throw InputError(std::string(what) + ": expected three numbers (x, y, z)");
-    }
-    return {v[0], v[1], v[2]};
-}
-
-py::dict coverage_dict(const ProbeCoverage& c) {
-    py::dict d;
-    d["surface"] = c.surface;
-    d["inferred"] = c.inferred;
-    d["empty"] = c.empty;
-    d["unknown"] = c.unknown;
-    return d;
 }
 
 PointCloud load_scans(const std::vector<std::string>& paths,

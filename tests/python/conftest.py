@@ -35,3 +35,22 @@ def run_cli(*args, check=False, timeout=600):
     if check and result.returncode != 0:
         raise AssertionError(f"lfprobe {' '.join(map(str, args))} failed:\n{result.stdout}\n{result.stderr}")
     return result
+
+
+def write_box_room_xyz(path, pitch):
+    """A 4 × 3 × 2.5 m box room (x −2..2, y −1.5..1.5, z 0..2.5) sampled on a square pattern of
+    `pitch` metres, as an 'x y z r g b' scan with a colour ramp over the room."""
+    import numpy as np
+
+    lo, hi = np.array([-2.0, -1.5, 0.0]), np.array([2.0, 1.5, 2.5])
+    chunks = []
+    for axis in range(3):
+        u, v = (axis + 1) % 3, (axis + 2) % 3
+        uu, vv = np.meshgrid(np.arange(lo[u], hi[u], pitch), np.arange(lo[v], hi[v], pitch), indexing="ij")
+        for wall in (lo[axis], hi[axis]):
+            p = np.zeros((uu.size, 3))
+            p[:, axis], p[:, u], p[:, v] = wall, uu.ravel(), vv.ravel()
+            chunks.append(p)
+    p = np.concatenate(chunks)
+    rgb = np.column_stack([(p[:, 0] + 2) * 60, (p[:, 1] + 1.5) * 80, p[:, 2] * 100]).astype(int)
+    np.savetxt(path, np.column_stack([p, rgb]), fmt=["%.4f"] * 3 + ["%d"] * 3)

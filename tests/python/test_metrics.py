@@ -13,7 +13,7 @@ import sys
 import numpy as np
 import pytest
 
-from conftest import ROOT, run_cli
+from conftest import ROOT, run_cli, write_box_room_xyz
 
 from lfprobe.core import flip as flip_module
 from lfprobe.core import metrics
@@ -196,19 +196,8 @@ def views(tmp_path_factory):
     """A box room scanned at 4 cm, one 64² probe, and 40×30 views: probe render, splat, and a
     probe render at another size."""
     folder = tmp_path_factory.mktemp("compare")
-    lo, hi = np.array([-2.0, -1.5, 0.0]), np.array([2.0, 1.5, 2.5])
-    chunks = []
-    for axis in range(3):
-        u, v = (axis + 1) % 3, (axis + 2) % 3
-        uu, vv = np.meshgrid(np.arange(lo[u], hi[u], 0.04), np.arange(lo[v], hi[v], 0.04), indexing="ij")
-        for wall in (lo[axis], hi[axis]):
-            p = np.zeros((uu.size, 3))
-            p[:, axis], p[:, u], p[:, v] = wall, uu.ravel(), vv.ravel()
-            chunks.append(p)
-    p = np.concatenate(chunks)
-    rgb = np.column_stack([(p[:, 0] + 2) * 60, (p[:, 1] + 1.5) * 80, p[:, 2] * 100]).astype(int)
     scan = folder / "room.xyz"
-    np.savetxt(scan, np.column_stack([p, rgb]), fmt=["%.4f"] * 3 + ["%d"] * 3)
+    write_box_room_xyz(scan, 0.04)
     probes = folder / "probes"
     run_cli("bake", "--scan", scan, "--scanner", 0, 0, 1.25, "--probe", 0, 0, 1.2, "--res", 64,
             "--out", probes, "--no-cache", "--quiet", check=True)

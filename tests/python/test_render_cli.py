@@ -5,26 +5,15 @@ import json
 import numpy as np
 import pytest
 
-from conftest import run_cli
+from conftest import run_cli, write_box_room_xyz
 
 
 @pytest.fixture(scope="module")
 def room(tmp_path_factory):
     """A 4 × 3 × 2.5 m box room as an .xyz scan (2 cm pitch) and a 2×2×1 probe grid baked from it."""
     folder = tmp_path_factory.mktemp("room")
-    lo, hi = np.array([-2.0, -1.5, 0.0]), np.array([2.0, 1.5, 2.5])
-    chunks = []
-    for axis in range(3):
-        u, v = (axis + 1) % 3, (axis + 2) % 3
-        uu, vv = np.meshgrid(np.arange(lo[u], hi[u], 0.02), np.arange(lo[v], hi[v], 0.02), indexing="ij")
-        for w in (lo[axis], hi[axis]):
-            p = np.zeros((uu.size, 3))
-            p[:, axis], p[:, u], p[:, v] = w, uu.ravel(), vv.ravel()
-            chunks.append(p)
-    p = np.concatenate(chunks)
-    rgb = np.column_stack([(p[:, 0] + 2) * 60, (p[:, 1] + 1.5) * 80, p[:, 2] * 100]).astype(int)
     scan = folder / "room.xyz"
-    np.savetxt(scan, np.column_stack([p, rgb]), fmt=["%.4f"] * 3 + ["%d"] * 3)
+    write_box_room_xyz(scan, 0.02)
     probes = folder / "probes"
     run_cli("bake", "--scan", scan, "--scanner", 0, 0, 1.25, "--grid-min", -1, -0.5, 1.2,
             "--grid-max", 1, 0.5, 1.2, "--counts", 2, 2, 1, "--res", 128, "--out", probes,
