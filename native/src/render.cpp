@@ -36,6 +36,41 @@ nlohmann::json render_settings_json(const RenderSettings& settings) {
                           {"sample", {settings.sample_x, settings.sample_y}}};
 }
 
+namespace {
+
+// The probe the eye sits at (within the trace's eye-at-probe distance), or -1.
+int probe_at(const ProbeField& field, const glm::dvec3& eye, const TraceSettings& settings) {
+    for (std::size_t i = 0; i < field.probe_count(); ++i) {
+        if (glm::length(eye - field.probe(i).position) <= settings.eye_at_probe_distance) {
+            return static_cast<int>(i);
+        }
+    }
+    return -1;
+}
+
+// The eye probe's O(1) lookup, falling back to the whole field where it answers UNKNOWN.
+FieldTraceResult trace_from_eye_probe(const ProbeField& field, int eye_probe, const Ray& ray,
+                                      const FieldTraceSettings& settings) {
+    const ProbeTraceResult r =
+        field.trace_one(static_cast<std::size_t>(eye_probe), ray, settings.probe);
+    if (r.status == TraceStatus::Unknown) {
+        return field.trace(ray, settings);
+    }
+    FieldTraceResult result;
+    result.status = r.status;
+    result.t = r.t;
+    result.free_until = r.free_until;
+    result.radiance = r.radiance;
+    result.normal = r.normal;
+    result.probe = eye_probe;
+    result.texel = r.texel;
+    result.steps = r.steps();
+    result.probes_tried = 1;
+    return result;
+}
+
+} // namespace
+
 RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
                                 const RenderSettings& settings, Progress* progress,
                                 RenderStats* stats) {
@@ -54,6 +89,9 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
     const auto start = std::chrono::steady_clock::now();
     const glm::dvec3 offset = field.world_offset();
     const std::size_t tile = static_cast<std::size_t>(settings.tile_size);
+    // An eye at a probe (DESIGN.md §4): every ray is one texel lookup in that probe; only rays
+    // it cannot answer (UNKNOWN texels) go through the whole field.
+    const int eye_probe = probe_at(field, camera.position() - offset, trace.probe);
     tbb::parallel_for(
         tbb::blocked_range2d<int>(0, camera.height, tile, 0, camera.width, tile),
         [&](const tbb::blocked_range2d<int>& r) {
@@ -64,7 +102,9 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
                 for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
                     const Ray ray =
                         camera.local_pixel_ray(x, y, offset, settings.sample_x, settings.sample_y);
-                    const FieldTraceResult hit = field.trace(ray, trace);
+                    const FieldTraceResult hit =
+                        eye_probe >= 0 ? trace_from_eye_probe(field, eye_probe, ray, trace)
+                                       : field.trace(ray, trace);
                     const std::size_t i = image.index(x, y);
                     const bool is_hit = hit.status == TraceStatus::Hit;
                     if (is_hit) {

@@ -268,3 +268,39 @@ TEST(Render, FromAProbeSetFolderAndACameraFileToAnExr) {
     EXPECT_EQ(m.at("settings").at("mode"), "auto");
     std::filesystem::remove_all(folder);
 }
+
+TEST(Render, EyeAtAProbeIsOneLookupPerRay) {
+    // DESIGN.md §4: with the eye at a probe every ray is a single texel lookup in that probe,
+    // in grid mode as in nearest mode, and the answer is the lookup's.
+    const ProbeField& field = baked_box_room();
+    const glm::dvec3 eye = field.probe(3).position;
+    const Camera camera = Camera::look_at(eye, eye + glm::dvec3(-1.0, 0.4, -0.2), 64, 48, 18.0);
+    for (const FieldMode mode : {FieldMode::Grid, FieldMode::Nearest}) {
+        RenderSettings settings;
+        settings.trace.mode = mode;
+        RenderStats stats;
+        const RenderedImage image = render_probe_view(field, camera, settings, nullptr, &stats);
+        std::size_t answered = 0;
+        for (int y = 0; y < image.height; ++y) {
+            for (int x = 0; x < image.width; ++x) {
+                const std::size_t i = image.index(x, y);
+                if (image.status[i] == static_cast<std::uint8_t>(TraceStatus::Unknown)) {
+                    continue; // the eye probe had no data: the field was asked
+                }
+                ++answered;
+                EXPECT_EQ(image.probe[i], 3);
+                EXPECT_EQ(image.steps[i], 1u);
+                const Ray ray = camera.local_pixel_ray(x, y, field.world_offset());
+                const ProbeTraceResult lookup =
+                    lookup_probe(field.probe(3), ray.direction, ray.t_min, ray.t_max);
+                EXPECT_EQ(image.status[i], static_cast<std::uint8_t>(lookup.status));
+                if (lookup.status == TraceStatus::Hit) {
+                    EXPECT_EQ(image.depth[i], static_cast<float>(lookup.t));
+                    EXPECT_EQ(image.rgba[4 * i], lookup.radiance.x);
+                }
+            }
+        }
+        EXPECT_GT(answered, image.pixel_count() * 99 / 100);
+        EXPECT_LT(stats.mean_probes(), 1.01);
+    }
+}
