@@ -153,32 +153,10 @@ void bind_mesh(py::module_& m) {
            std::vector<std::vector<double>> positions, std::optional<std::vector<double>> grid_min,
            std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
            const std::string& sources_json, int supersample) {
-            ProbePlacement placement;
             // Meshes have world offset 0, so world and local probe positions coincide.
-            if (grid_min || grid_max || counts) {
-                if (!(grid_min && grid_max && counts) || counts->size() != 3) {
-                    throw InputError("bake: a grid needs grid_min, grid_max and three counts");
-                }
-                if (!positions.empty()) {
-                    throw InputError("bake: give probe positions or a grid, not both");
-                }
-                placement = ProbePlacement::from_grid(ProbeGrid::spanning(
-                    dvec3_from(*grid_min, "grid_min"), dvec3_from(*grid_max, "grid_max"),
-                    {(*counts)[0], (*counts)[1], (*counts)[2]}));
-            } else {
-                std::vector<glm::dvec3> local;
-                for (const auto& p : positions) {
-                    local.push_back(dvec3_from(p, "probe position"));
-                }
-                placement = ProbePlacement::from_positions(std::move(local));
-            }
-            nlohmann::json sources;
-            try {
-                sources = nlohmann::json::parse(sources_json);
-            } catch (const nlohmann::json::exception& e) {
-                throw InputError(std::string("bake: sources_json is not valid JSON (") + e.what() +
-                                 ")");
-            }
+            const ProbePlacement placement =
+                placement_from(positions, grid_min, grid_max, counts, glm::dvec3(0.0));
+            const nlohmann::json sources = sources_from(sources_json);
             MeshBakeSettings settings;
             settings.resolution = resolution;
             settings.supersample = supersample;
@@ -189,17 +167,8 @@ void bind_mesh(py::module_& m) {
                     return bake_probe_set_from_mesh(*h->scene, placement, settings, folder, sources,
                                                     &progress);
                 }),
-                std::function<py::object(BakeSummary &&)>([](BakeSummary&& s) -> py::object {
-                    py::dict d;
-                    d["folder"] = s.folder;
-                    d["probe_count"] = s.probe_count;
-                    d["bake_seconds"] = s.bake_seconds;
-                    d["write_seconds"] = s.write_seconds;
-                    d["mean_coverage"] = coverage_dict(s.mean_coverage);
-                    d["bytes_in_memory_per_probe"] = s.bytes_in_memory_per_probe;
-                    d["bytes_on_disk"] = s.bytes_on_disk;
-                    return d;
-                }));
+                std::function<py::object(BakeSummary &&)>(
+                    [](BakeSummary&& s) -> py::object { return bake_summary_dict(s, false); }));
         },
         py::arg("mesh"), py::arg("folder"), py::arg("resolution") = 512,
         py::arg("positions") = std::vector<std::vector<double>>{}, py::arg("grid_min") = py::none(),

@@ -1,6 +1,7 @@
 // Small pieces that several bindings files share.
 #pragma once
 
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -14,6 +15,8 @@
 #include "lfprobe/camera.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/probe_map.hpp"
+#include "lfprobe/probe_placement.hpp"
+#include "lfprobe/probe_set.hpp"
 
 namespace lfprobe::python {
 
@@ -54,6 +57,57 @@ inline pybind11::dict coverage_dict(const ProbeCoverage& c) {
     d["inferred"] = c.inferred;
     d["empty"] = c.empty;
     d["unknown"] = c.unknown;
+    return d;
+}
+
+// Probes at `positions`, or on a grid from grid_min to grid_max with `counts`, as Python
+// passes them (world coordinates); `world_offset` is subtracted to give the local frame.
+inline ProbePlacement placement_from(const std::vector<std::vector<double>>& positions,
+                                     const std::optional<std::vector<double>>& grid_min,
+                                     const std::optional<std::vector<double>>& grid_max,
+                                     const std::optional<std::vector<int>>& counts,
+                                     const glm::dvec3& world_offset) {
+    if (grid_min || grid_max || counts) {
+        if (!(grid_min && grid_max && counts) || counts->size() != 3) {
+            throw InputError("bake: a grid needs grid_min, grid_max and three counts");
+        }
+        if (!positions.empty()) {
+            throw InputError("bake: give probe positions or a grid, not both");
+        }
+        return ProbePlacement::from_grid(
+            ProbeGrid::spanning(dvec3_from(*grid_min, "grid_min") - world_offset,
+                                dvec3_from(*grid_max, "grid_max") - world_offset,
+                                {(*counts)[0], (*counts)[1], (*counts)[2]}));
+    }
+    std::vector<glm::dvec3> local;
+    for (const auto& p : positions) {
+        local.push_back(dvec3_from(p, "probe position") - world_offset);
+    }
+    return ProbePlacement::from_positions(std::move(local));
+}
+
+// The manifest's "sources" from the JSON text Python passes.
+inline nlohmann::json sources_from(const std::string& sources_json) {
+    try {
+        return nlohmann::json::parse(sources_json);
+    } catch (const nlohmann::json::exception& e) {
+        throw InputError(std::string("bake: sources_json is not valid JSON (") + e.what() + ")");
+    }
+}
+
+// A bake's summary as a dict; normals_seconds only for bakes that estimate normals.
+inline pybind11::dict bake_summary_dict(const BakeSummary& s, bool with_normals) {
+    pybind11::dict d;
+    d["folder"] = s.folder;
+    d["probe_count"] = s.probe_count;
+    if (with_normals) {
+        d["normals_seconds"] = s.normals_seconds;
+    }
+    d["bake_seconds"] = s.bake_seconds;
+    d["write_seconds"] = s.write_seconds;
+    d["mean_coverage"] = coverage_dict(s.mean_coverage);
+    d["bytes_in_memory_per_probe"] = s.bytes_in_memory_per_probe;
+    d["bytes_on_disk"] = s.bytes_on_disk;
     return d;
 }
 

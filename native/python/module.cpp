@@ -23,9 +23,12 @@
 
 namespace py = pybind11;
 using namespace lfprobe;
+using lfprobe::python::bake_summary_dict;
 using lfprobe::python::coverage_dict;
 using lfprobe::python::dvec3_from;
 using lfprobe::python::Job;
+using lfprobe::python::placement_from;
+using lfprobe::python::sources_from;
 
 namespace {
 
@@ -95,55 +98,19 @@ struct BakeRequest {
     LocalGeometryOptions geometry;
 };
 
-ProbePlacement placement_of(const BakeRequest& r, const glm::dvec3& world_offset) {
-    const glm::dvec3 shift = r.positions_in_world ? world_offset : glm::dvec3(0.0);
-    if (r.grid_min || r.grid_max || r.counts) {
-        if (!(r.grid_min && r.grid_max && r.counts) || r.counts->size() != 3) {
-            throw InputError("bake: a grid needs grid_min, grid_max and three counts");
-        }
-        if (!r.positions.empty()) {
-            throw InputError("bake: give probe positions or a grid, not both");
-        }
-        return ProbePlacement::from_grid(
-            ProbeGrid::spanning(dvec3_from(*r.grid_min, "grid_min") - shift,
-                                dvec3_from(*r.grid_max, "grid_max") - shift,
-                                {(*r.counts)[0], (*r.counts)[1], (*r.counts)[2]}));
-    }
-    std::vector<glm::dvec3> local;
-    for (const auto& p : r.positions) {
-        local.push_back(dvec3_from(p, "probe position") - shift);
-    }
-    return ProbePlacement::from_positions(std::move(local));
-}
-
-py::object summary_dict(BakeSummary&& s) {
-    py::dict d;
-    d["folder"] = s.folder;
-    d["probe_count"] = s.probe_count;
-    d["normals_seconds"] = s.normals_seconds;
-    d["bake_seconds"] = s.bake_seconds;
-    d["write_seconds"] = s.write_seconds;
-    d["mean_coverage"] = coverage_dict(s.mean_coverage);
-    d["bytes_in_memory_per_probe"] = s.bytes_in_memory_per_probe;
-    d["bytes_on_disk"] = s.bytes_on_disk;
-    return d;
-}
-
 std::unique_ptr<Job> start_bake(std::shared_ptr<PointCloud> cloud, BakeRequest request) {
-    const ProbePlacement placement = placement_of(request, cloud->world_offset);
-    nlohmann::json sources;
-    try {
-        sources = nlohmann::json::parse(request.sources_json);
-    } catch (const nlohmann::json::exception& e) {
-        throw InputError(std::string("bake: sources_json is not valid JSON (") + e.what() + ")");
-    }
-    return std::make_unique<Job>(std::function<BakeSummary(Progress&)>(
-                                     [cloud, request, placement, sources](Progress& progress) {
-                                         return bake_probe_set_from_cloud(
-                                             *cloud, placement, request.settings, request.geometry,
+    const ProbePlacement placement =
+        placement_from(request.positions, request.grid_min, request.grid_max, request.counts,
+                       request.positions_in_world ? cloud->world_offset : glm::dvec3(0.0));
+    const nlohmann::json sources = sources_from(request.sources_json);
+    return std::make_unique<Job>(
+        std::function<BakeSummary(Progress&)>([cloud, request, placement,
+                                               sources](Progress& progress) {
+            return bake_probe_set_from_cloud(*cloud, placement, request.settings, request.geometry,
                                              request.folder, sources, &progress);
-                                     }),
-                                 std::function<py::object(BakeSummary &&)>(summary_dict));
+        }),
+        std::function<py::object(BakeSummary &&)>(
+            [](BakeSummary&& s) -> py::object { return bake_summary_dict(s, true); }));
 }
 
 std::unique_ptr<Job> start_load(std::vector<std::string> paths,

@@ -12,6 +12,7 @@
 #include <fast_float/fast_float.h>
 
 #include "lfprobe/error.hpp"
+#include "text_words.hpp"
 
 namespace lfprobe {
 
@@ -21,25 +22,7 @@ namespace {
 
 // Whitespace-separated tokens of one line, without the trailing comment.
 std::vector<std::string_view> split_tokens(std::string_view line) {
-    const auto hash = line.find('#');
-    if (hash != std::string_view::npos) {
-        line = line.substr(0, hash);
-    }
-    std::vector<std::string_view> out;
-    std::size_t i = 0;
-    while (i < line.size()) {
-        while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) {
-            ++i;
-        }
-        const std::size_t start = i;
-        while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') {
-            ++i;
-        }
-        if (i > start) {
-            out.push_back(line.substr(start, i - start));
-        }
-    }
-    return out;
+    return split_words(line.substr(0, line.find('#')));
 }
 
 std::optional<double> parse_double(std::string_view s) {

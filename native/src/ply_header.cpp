@@ -1,5 +1,6 @@
 // PLY header parsing: line by line up to end_header, LF or CRLF.
 #include "ply_header.hpp"
+#include "text_words.hpp"
 
 #include <array>
 #include <charconv>
@@ -45,24 +46,6 @@ constexpr std::array<TypeName, 16> type_names{{
         }
     }
     return std::nullopt;
-}
-
-[[nodiscard]] std::vector<std::string_view> split_words(std::string_view line) {
-    std::vector<std::string_view> words;
-    std::size_t i = 0;
-    while (i < line.size()) {
-        while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) {
-            ++i;
-        }
-        const std::size_t start = i;
-        while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') {
-            ++i;
-        }
-        if (i > start) {
-            words.push_back(line.substr(start, i - start));
-        }
-    }
-    return words;
 }
 
 [[nodiscard]] std::optional<double> finite_number(std::string_view text) {

@@ -7,7 +7,7 @@ import os
 
 import pytest
 
-from lfprobe.core import cli_mesh, native
+from lfprobe.core import cli, cli_mesh, native
 from lfprobe.core.pipeline import BakeOptions, ProbePlacementSpec
 
 DATA = os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "data", "meshes")
@@ -34,7 +34,7 @@ def test_load_mesh_and_ground_truth(tmp_path):
     (lo, hi) = mesh.bounds
     assert lo[1] == pytest.approx(0.0) and hi[1] == pytest.approx(1.99)
     out = str(tmp_path / "gt.exr")
-    assert cli_mesh.run_cli(["gt", "--mesh", CORNELL, "--camera", _camera(tmp_path), "--out", out,
+    assert cli.main(["gt", "--mesh", CORNELL, "--camera", _camera(tmp_path), "--out", out,
                              "--spp", "4", "--threads", "2", "--quiet"]) == 0
     image = _native.read_image(out)
     assert image["width"] == 64
@@ -46,7 +46,7 @@ def test_load_mesh_and_ground_truth(tmp_path):
 def test_scan_and_bake(tmp_path):
     _native = native.load()
     xyz = str(tmp_path / "scan.xyz")
-    assert cli_mesh.run_cli(["scan", "--mesh", CORNELL, "--at", "0", "1", "0", "--step-deg", "4",
+    assert cli.main(["scan", "--mesh", CORNELL, "--at", "0", "1", "0", "--step-deg", "4",
                              "--out", xyz, "--quiet"]) == 0
     with open(xyz) as f:
         assert f.readline().startswith("# scanner 0.000000 1.000000 0.000000")

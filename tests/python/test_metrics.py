@@ -7,7 +7,6 @@ to the stated tolerances); PSNR, depth errors and the confusion on hand-made val
 import json
 import math
 import os
-import subprocess
 import sys
 
 import numpy as np
@@ -185,10 +184,8 @@ REQUIRED_KEYS = {"psnr", "ssim", "flip", "depth_absrel", "depth_rmse", "hole_rat
 
 
 def run_compare(*args):
-    """`compare` through its module entry point (works before and after cli.py wires it in)."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([os.path.join(ROOT, "addon"), PYDEPS]))
-    return subprocess.run([sys.executable, "-m", "lfprobe.core.cli_compare", *map(str, args)],
-                          capture_output=True, text=True, timeout=120, env=env)
+    """`./lfprobe compare ...`"""
+    return run_cli("compare", *args, timeout=120)
 
 
 @pytest.fixture(scope="module")

@@ -14,10 +14,9 @@ import json
 import math
 import os
 import struct
-import sys
 import time
 import zlib
-from typing import Dict, Optional, Sequence
+from typing import Dict, Optional
 
 import numpy as np
 
@@ -156,25 +155,3 @@ def add_parsers(subparsers) -> argparse.ArgumentParser:
     compare.add_argument("--error-map", metavar="OUT.png", help="write the FLIP error as a magma PNG")
     compare.set_defaults(run=_cmd_compare)
     return compare
-
-
-def main(argv: Optional[Sequence[str]] = None) -> int:
-    """Runs `compare` on its own (the same errors and exit statuses as the lfprobe command)."""
-    parser = argparse.ArgumentParser(prog="lfprobe")
-    add_parsers(parser.add_subparsers(dest="command", required=True))
-    args = parser.parse_args(["compare", *(sys.argv[1:] if argv is None else argv)])
-    try:
-        return args.run(args)
-    except native.NativeModuleError as error:
-        print(f"lfprobe: {error}", file=sys.stderr)
-        return 1
-    except (ValueError, FileNotFoundError) as error:
-        print(f"lfprobe: error: {error}", file=sys.stderr)
-        return 2
-    except OSError as error:
-        print(f"lfprobe: error: {error}", file=sys.stderr)
-        return 1
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import json
 import os
-from typing import Optional, Sequence
+from typing import Sequence
 
 from . import native
 from .pipeline import BakeOptions, ProbePlacementSpec, Progress
@@ -125,13 +125,3 @@ def add_parsers(subparsers) -> None:
     scan.add_argument("--json", action="store_true", help="print the stats as JSON")
     scan.add_argument("--quiet", action="store_true", help="no progress output")
     scan.set_defaults(run=_cmd_scan)
-
-
-def run_cli(argv: Optional[Sequence[str]] = None) -> int:
-    """Runs ``gt``/``scan`` alone (for tests without the main CLI)."""
-    import argparse
-
-    parser = argparse.ArgumentParser(prog="lfprobe")
-    add_parsers(parser.add_subparsers(dest="command", required=True))
-    args = parser.parse_args(argv)
-    return args.run(args)
