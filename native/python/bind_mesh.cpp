@@ -1,10 +1,12 @@
 // Bindings of the mesh side: loading meshes, Embree ground truth and throughput, probe sets
 // baked from meshes, simulated scans. Logic stays in the core; these only convert arguments.
+#include <cstring>
 #include <memory>
 #include <optional>
 #include <string>
 #include <variant>
 
+#include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 #include <tbb/task_arena.h>
 
@@ -17,6 +19,7 @@
 #include "lfprobe/mesh_bake.hpp"
 #include "lfprobe/mesh_reader.hpp"
 #include "lfprobe/scanner_sim.hpp"
+#include "lfprobe/texture.hpp"
 
 namespace py = pybind11;
 
@@ -47,6 +50,138 @@ MeshHandle resolve(const MeshArg& arg) {
     return load_mesh(std::get<std::string>(arg));
 }
 
+// Rows of an optional (rows, width) float array, or empty when None.
+template <int Width>
+std::vector<glm::vec<Width, float>> optional_rows(const py::object& value, std::size_t rows,
+                                                  const char* what) {
+    std::vector<glm::vec<Width, float>> out;
+    if (value.is_none()) {
+        return out;
+    }
+    const auto a = py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(value);
+    if (!a || a.ndim() != 2 || static_cast<std::size_t>(a.shape(0)) != rows ||
+        a.shape(1) != Width) {
+        throw InputError(std::string("mesh_from_arrays: expected ") + what + " of shape (" +
+                         std::to_string(rows) + ", " + std::to_string(Width) + ")");
+    }
+    out.resize(rows);
+    std::memcpy(out.data(), a.data(), rows * Width * sizeof(float));
+    return out;
+}
+
+std::vector<std::uint32_t> optional_ids(const py::object& value, std::size_t count,
+                                        std::size_t limit, const char* what) {
+    if (value.is_none()) {
+        return std::vector<std::uint32_t>(count, 0);
+    }
+    const auto a =
+        py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>::ensure(value);
+    if (!a || a.ndim() != 1 || static_cast<std::size_t>(a.shape(0)) != count) {
+        throw InputError(std::string("mesh_from_arrays: expected ") + what + " of shape (" +
+                         std::to_string(count) + ",)");
+    }
+    std::vector<std::uint32_t> out(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        const std::int64_t v = a.data()[i];
+        if (v < 0 || static_cast<std::size_t>(v) >= limit) {
+            throw InputError(std::string("mesh_from_arrays: ") + what + "[" + std::to_string(i) +
+                             "] = " + std::to_string(v) + " is out of range (expected 0 to " +
+                             std::to_string(limit == 0 ? 0 : limit - 1) + ")");
+        }
+        out[i] = static_cast<std::uint32_t>(v);
+    }
+    return out;
+}
+
+Material material_from_dict(const py::handle& item, std::size_t index) {
+    if (!py::isinstance<py::dict>(item)) {
+        throw InputError("mesh_from_arrays: materials[" + std::to_string(index) +
+                         "] is not a dict");
+    }
+    const auto d = py::reinterpret_borrow<py::dict>(item);
+    Material mat;
+    mat.name = d.contains("name") ? py::str(d["name"]).cast<std::string>()
+                                  : "material " + std::to_string(index);
+    if (d.contains("base_color")) {
+        const auto c = d["base_color"].cast<std::vector<float>>();
+        if (c.size() < 3) {
+            throw InputError("mesh_from_arrays: material '" + mat.name +
+                             "' base_color needs 3 values");
+        }
+        mat.base_color = glm::vec3(c[0], c[1], c[2]);
+    }
+    if (d.contains("texture") && !d["texture"].is_none()) {
+        const py::object tex = d["texture"];
+        if (py::isinstance<py::str>(tex)) {
+            mat.texture = std::make_shared<const Texture>(Texture::load(tex.cast<std::string>()));
+        } else {
+            const auto a =
+                py::array_t<float, py::array::c_style | py::array::forcecast>::ensure(tex);
+            if (!a || a.ndim() != 3 || (a.shape(2) != 3 && a.shape(2) != 4)) {
+                throw InputError("mesh_from_arrays: material '" + mat.name +
+                                 "' texture must be a path or an (h, w, 3|4) float array");
+            }
+            const bool srgb = d.contains("texture_srgb") ? d["texture_srgb"].cast<bool>() : true;
+            const bool bottom_up =
+                d.contains("texture_bottom_up") ? d["texture_bottom_up"].cast<bool>() : true;
+            mat.texture = std::make_shared<const Texture>(Texture::from_pixels(
+                mat.name + " texture", static_cast<int>(a.shape(1)), static_cast<int>(a.shape(0)),
+                a.data(), static_cast<int>(a.shape(2)), srgb, bottom_up));
+        }
+    }
+    return mat;
+}
+
+Mesh mesh_from_arrays(
+    const py::array_t<double, py::array::c_style | py::array::forcecast>& vertices,
+    const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>& triangles,
+    const py::object& corner_uvs, const py::object& corner_colors, const py::object& corner_normals,
+    const py::object& material, const py::object& object, const py::list& materials,
+    const std::vector<std::string>& object_names, const std::string& name) {
+    if (vertices.ndim() != 2 || vertices.shape(1) != 3) {
+        throw InputError("mesh_from_arrays: expected vertices of shape (V, 3)");
+    }
+    if (triangles.ndim() != 2 || triangles.shape(1) != 3) {
+        throw InputError("mesh_from_arrays: expected triangles of shape (T, 3)");
+    }
+    const auto vertex_count = static_cast<std::size_t>(vertices.shape(0));
+    const auto tri_count = static_cast<std::size_t>(triangles.shape(0));
+    Mesh mesh;
+    mesh.path = name;
+    std::vector<glm::dvec3> world(vertex_count);
+    std::memcpy(world.data(), vertices.data(), vertex_count * 3 * sizeof(double));
+    mesh.set_world_vertices(world);
+    mesh.triangles.resize(tri_count);
+    for (std::size_t t = 0; t < tri_count; ++t) {
+        for (std::size_t k = 0; k < 3; ++k) {
+            const std::int64_t v = triangles.data()[3 * t + k];
+            if (v < 0 || static_cast<std::size_t>(v) >= vertex_count) {
+                throw InputError("mesh_from_arrays: triangle " + std::to_string(t) +
+                                 " names vertex " + std::to_string(v) + ", expected 0 to " +
+                                 std::to_string(vertex_count == 0 ? 0 : vertex_count - 1));
+            }
+            mesh.triangles[t][k] = static_cast<std::uint32_t>(v);
+        }
+    }
+    mesh.corner_uvs = optional_rows<2>(corner_uvs, 3 * tri_count, "corner_uvs");
+    mesh.corner_colors = optional_rows<3>(corner_colors, 3 * tri_count, "corner_colors");
+    mesh.corner_normals = optional_rows<3>(corner_normals, 3 * tri_count, "corner_normals");
+    for (std::size_t i = 0; i < materials.size(); ++i) {
+        mesh.materials.push_back(material_from_dict(materials[i], i));
+    }
+    if (mesh.materials.empty()) {
+        mesh.materials.push_back(Material{"default", glm::vec3(0.8f), nullptr});
+    }
+    mesh.object_names = object_names;
+    if (mesh.object_names.empty()) {
+        mesh.object_names.emplace_back("default");
+    }
+    mesh.material = optional_ids(material, tri_count, mesh.materials.size(), "material");
+    mesh.object = optional_ids(object, tri_count, mesh.object_names.size(), "object");
+    mesh.validate(name);
+    return mesh;
+}
+
 } // namespace
 
 void bind_mesh(py::module_& m) {
@@ -56,11 +191,20 @@ void bind_mesh(py::module_& m) {
         .def_property_readonly("triangle_count",
                                [](const LoadedMesh& h) { return h.mesh.triangle_count(); })
         .def("__len__", [](const LoadedMesh& h) { return h.mesh.triangle_count(); })
-        .def_property_readonly("bounds",
+        .def_property_readonly(
+            "bounds",
+            [](const LoadedMesh& h) {
+                const MeshBounds b = h.mesh.bounds();
+                const glm::dvec3 lo = h.mesh.world_offset + glm::dvec3(b.min);
+                const glm::dvec3 hi = h.mesh.world_offset + glm::dvec3(b.max);
+                return py::make_tuple(py::make_tuple(lo.x, lo.y, lo.z),
+                                      py::make_tuple(hi.x, hi.y, hi.z));
+            },
+            "World bounds ((min), (max)) of the vertices that triangles use.")
+        .def_property_readonly("world_offset",
                                [](const LoadedMesh& h) {
-                                   const MeshBounds b = h.mesh.bounds();
-                                   return py::make_tuple(py::make_tuple(b.min.x, b.min.y, b.min.z),
-                                                         py::make_tuple(b.max.x, b.max.y, b.max.z));
+                                   const glm::dvec3 o = h.mesh.world_offset;
+                                   return py::make_tuple(o.x, o.y, o.z);
                                })
         .def_property_readonly("objects", [](const LoadedMesh& h) { return h.mesh.object_names; })
         .def_property_readonly("materials", [](const LoadedMesh& h) {
@@ -83,6 +227,36 @@ void bind_mesh(py::module_& m) {
             return load_mesh(path);
         },
         py::arg("path"), "Read an OBJ (+MTL, textures) or PLY mesh and build its Embree scene.");
+
+    m.def(
+        "mesh_from_arrays",
+        [](const py::array_t<double, py::array::c_style | py::array::forcecast>& vertices,
+           const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>& triangles,
+           const py::object& corner_uvs, const py::object& corner_colors,
+           const py::object& corner_normals, const py::object& material, const py::object& object,
+           const py::list& materials, const std::vector<std::string>& object_names,
+           const std::string& name) {
+            auto handle = std::make_shared<LoadedMesh>();
+            handle->mesh =
+                mesh_from_arrays(vertices, triangles, corner_uvs, corner_colors, corner_normals,
+                                 material, object, materials, object_names, name);
+            py::gil_scoped_release release;
+            handle->scene = std::make_unique<EmbreeScene>(handle->mesh);
+            return handle;
+        },
+        py::arg("vertices"), py::arg("triangles"), py::arg("corner_uvs") = py::none(),
+        py::arg("corner_colors") = py::none(), py::arg("corner_normals") = py::none(),
+        py::arg("material") = py::none(), py::arg("object") = py::none(),
+        py::arg("materials") = py::list(), py::arg("object_names") = std::vector<std::string>{},
+        py::arg("name") = "<arrays>",
+        "A Mesh from arrays, as the Blender add-on hands objects over: vertices (V, 3) world "
+        "positions in double (the world offset is chosen as for scans), triangles (T, 3) vertex "
+        "indices; optional per corner (3T, 2) uvs, (3T, 3) linear colours, (3T, 3) normals; "
+        "optional per triangle material and object indices (T,). materials: dicts with 'name', "
+        "'base_color' (linear r, g, b) and optionally 'texture': an image path, or an array "
+        "(h, w, 3 or 4) of floats with 'texture_srgb' (default True: values are sRGB-encoded, "
+        "as Blender's byte images give them) and 'texture_bottom_up' (default True: row 0 is the "
+        "bottom row, as Blender's Image.pixels are).");
 
     m.def(
         "start_ground_truth",
@@ -153,9 +327,9 @@ void bind_mesh(py::module_& m) {
            std::vector<std::vector<double>> positions, std::optional<std::vector<double>> grid_min,
            std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
            const std::string& sources_json, int supersample) {
-            // Meshes have world offset 0, so world and local probe positions coincide.
-            const ProbePlacement placement =
-                placement_from(positions, grid_min, grid_max, counts, glm::dvec3(0.0));
+            // Checked now so that bad placements raise at once; made local to the mesh's world
+            // offset once the job has the mesh.
+            (void)placement_from(positions, grid_min, grid_max, counts, glm::dvec3(0.0));
             const nlohmann::json sources = sources_from(sources_json);
             MeshBakeSettings settings;
             settings.resolution = resolution;
@@ -164,6 +338,8 @@ void bind_mesh(py::module_& m) {
                 std::function<BakeSummary(Progress&)>([=](Progress& progress) {
                     progress.begin_stage("loading mesh", 1);
                     const MeshHandle h = resolve(mesh);
+                    const ProbePlacement placement =
+                        placement_from(positions, grid_min, grid_max, counts, h->mesh.world_offset);
                     return bake_probe_set_from_mesh(*h->scene, placement, settings, folder, sources,
                                                     &progress);
                 }),

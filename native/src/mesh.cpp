@@ -1,11 +1,13 @@
 #include "lfprobe/mesh.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include <glm/common.hpp>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/world_offset.hpp"
 
 namespace lfprobe {
 
@@ -40,8 +42,29 @@ glm::vec3 Mesh::base_color(std::size_t tri, float u, float v) const {
     return c;
 }
 
+void Mesh::set_world_vertices(const std::vector<glm::dvec3>& world) {
+    glm::dvec3 lo(std::numeric_limits<double>::infinity());
+    glm::dvec3 hi(-std::numeric_limits<double>::infinity());
+    for (const glm::dvec3& p : world) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    world_offset = world_offset_for_bounds(lo, hi);
+    vertices.resize(world.size());
+    for (std::size_t i = 0; i < world.size(); ++i) {
+        vertices[i] = glm::vec3(world[i] - world_offset);
+    }
+}
+
 void Mesh::validate(const std::string& where) const {
     const std::size_t n = triangles.size();
+    for (std::size_t i = 0; i < vertices.size(); ++i) {
+        const glm::vec3& p = vertices[i];
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+            throw InputError(where + ": vertex " + std::to_string(i) +
+                             " is not finite (expected real coordinates)");
+        }
+    }
     if (material.size() != n || object.size() != n) {
         throw InputError(where + ": expected one material and one object id per triangle");
     }

@@ -149,6 +149,7 @@ Mesh read_ply_mesh(const std::string& path) {
     Mesh mesh;
     mesh.path = path;
     PlyValueReader reader(file, header);
+    std::vector<glm::dvec3> world_vertices; // double until the world offset is chosen
     std::vector<glm::vec3> colors;
     std::vector<glm::vec2> uvs;
     bool has_vertex_element = false;
@@ -208,9 +209,9 @@ Mesh read_ply_mesh(const std::string& path) {
             const FileLocation where = reader.where();
             reader.end_item();
             if (is_vertex) {
-                mesh.vertices.emplace_back(values[static_cast<std::size_t>(ix)],
-                                           values[static_cast<std::size_t>(iy)],
-                                           values[static_cast<std::size_t>(iz)]);
+                world_vertices.emplace_back(values[static_cast<std::size_t>(ix)],
+                                            values[static_cast<std::size_t>(iy)],
+                                            values[static_cast<std::size_t>(iz)]);
                 if (has_color) {
                     glm::vec3 c{static_cast<float>(values[static_cast<std::size_t>(ir)]),
                                 static_cast<float>(values[static_cast<std::size_t>(ig)]),
@@ -235,9 +236,9 @@ Mesh read_ply_mesh(const std::string& path) {
                     throw input_error_at(where, "expected a face of at least 3 vertices");
                 }
                 for (const std::int64_t index : face) {
-                    if (index < 0 || static_cast<std::size_t>(index) >= mesh.vertices.size()) {
+                    if (index < 0 || static_cast<std::size_t>(index) >= world_vertices.size()) {
                         throw input_error_at(where, "expected vertex indices below " +
-                                                        std::to_string(mesh.vertices.size()) +
+                                                        std::to_string(world_vertices.size()) +
                                                         ", got " + std::to_string(index));
                     }
                 }
@@ -249,6 +250,7 @@ Mesh read_ply_mesh(const std::string& path) {
             }
         }
     }
+    mesh.set_world_vertices(world_vertices);
     for (const auto& t : mesh.triangles) {
         for (const std::uint32_t i : t) {
             if (!colors.empty()) {

@@ -83,18 +83,23 @@ FileLocation at_line(const std::string& path, std::uint64_t line) {
     return FileLocation{path, line, 0, true};
 }
 
-glm::vec3 read_vec3(const std::vector<std::string_view>& tokens, std::size_t first,
-                    const FileLocation& where, const char* what) {
-    glm::vec3 v{0.0f};
+glm::dvec3 read_dvec3(const std::vector<std::string_view>& tokens, std::size_t first,
+                      const FileLocation& where, const char* what) {
+    glm::dvec3 v{0.0};
     for (int k = 0; k < 3; ++k) {
         const std::size_t i = first + static_cast<std::size_t>(k);
         const auto value = i < tokens.size() ? parse_double(tokens[i]) : std::nullopt;
         if (!value) {
             throw input_error_at(where, std::string("expected ") + what);
         }
-        v[k] = static_cast<float>(*value);
+        v[k] = *value;
     }
     return v;
+}
+
+glm::vec3 read_vec3(const std::vector<std::string_view>& tokens, std::size_t first,
+                    const FileLocation& where, const char* what) {
+    return glm::vec3(read_dvec3(tokens, first, where, what));
 }
 
 // Materials of an MTL file, by name; texture paths are relative to the MTL's folder.
@@ -186,6 +191,7 @@ Mesh read_obj(const std::string& path) {
     const fs::path folder = fs::path(path).parent_path();
     Mesh mesh;
     mesh.path = path;
+    std::vector<glm::dvec3> world_vertices; // double until the world offset is chosen
     std::vector<glm::vec2> uvs;
     std::vector<glm::vec3> normals;
     std::vector<glm::vec3> vertex_colors;
@@ -223,7 +229,7 @@ Mesh read_obj(const std::string& path) {
         const FileLocation where = at_line(path, line);
         const std::string_view kw = t[0];
         if (kw == "v") {
-            mesh.vertices.push_back(read_vec3(t, 1, where, "v x y z"));
+            world_vertices.push_back(read_dvec3(t, 1, where, "v x y z"));
             if (t.size() >= 7) {
                 vertex_colors.push_back(read_vec3(t, 4, where, "v x y z r g b"));
                 any_vertex_color = true;
@@ -248,7 +254,7 @@ Mesh read_obj(const std::string& path) {
                 const std::string_view c = t[i];
                 ObjCorner corner;
                 const auto s1 = c.find('/');
-                corner.v = resolve_index(c.substr(0, s1), mesh.vertices.size(), where, "vertex");
+                corner.v = resolve_index(c.substr(0, s1), world_vertices.size(), where, "vertex");
                 if (s1 != std::string_view::npos) {
                     const std::string_view rest = c.substr(s1 + 1);
                     const auto s2 = rest.find('/');
@@ -303,6 +309,7 @@ Mesh read_obj(const std::string& path) {
         }
     });
 
+    mesh.set_world_vertices(world_vertices);
     const std::size_t tri_count = corners.size() / 3;
     mesh.triangles.resize(tri_count);
     bool any_uv = false;

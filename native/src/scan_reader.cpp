@@ -14,6 +14,7 @@
 #include "lfprobe/color.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/mapped_file.hpp"
+#include "lfprobe/world_offset.hpp"
 #include "ply_reader.hpp"
 #include "scan_parsing.hpp"
 #include "text_scan_reader.hpp"
@@ -21,9 +22,6 @@
 namespace lfprobe {
 
 namespace {
-
-// Clouds within this distance of the origin keep world coordinates as they are.
-constexpr double near_origin_limit = 1024.0;
 
 struct Bounds {
     glm::dvec3 min{std::numeric_limits<double>::infinity()};
@@ -65,16 +63,7 @@ struct Bounds {
     for (const ScanFile& file : files) {
         bounds.add(world_bounds(file));
     }
-    if (bounds.empty()) {
-        return glm::dvec3(0.0);
-    }
-    const glm::dvec3 largest = glm::max(glm::abs(bounds.min), glm::abs(bounds.max));
-    if (largest.x <= near_origin_limit && largest.y <= near_origin_limit &&
-        largest.z <= near_origin_limit) {
-        return glm::dvec3(0.0);
-    }
-    const glm::dvec3 centre = 0.5 * (bounds.min + bounds.max);
-    return glm::dvec3(std::round(centre.x), std::round(centre.y), std::round(centre.z));
+    return world_offset_for_bounds(bounds.min, bounds.max);
 }
 
 template <class T>

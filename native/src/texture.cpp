@@ -39,6 +39,42 @@ Texture Texture::load(const std::string& path) {
     return t;
 }
 
+Texture Texture::from_pixels(std::string name, int width, int height, const float* pixels,
+                             int channels, bool srgb, bool bottom_up) {
+    if (width < 1 || height < 1 || (channels != 3 && channels != 4)) {
+        throw InputError(name +
+                         ": expected a texture of at least 1x1 pixels with 3 or 4 "
+                         "channels, got " +
+                         std::to_string(width) + "x" + std::to_string(height) + "x" +
+                         std::to_string(channels));
+    }
+    Texture t;
+    t.path = std::move(name);
+    t.width = width;
+    t.height = height;
+    t.rgb.resize(static_cast<std::size_t>(width) * static_cast<std::size_t>(height) * 3);
+    for (int y = 0; y < height; ++y) {
+        const int source_row = bottom_up ? height - 1 - y : y;
+        for (int x = 0; x < width; ++x) {
+            const float* p =
+                pixels + (static_cast<std::size_t>(source_row) * static_cast<std::size_t>(width) +
+                          static_cast<std::size_t>(x)) *
+                             static_cast<std::size_t>(channels);
+            for (int c = 0; c < 3; ++c) {
+                if (!std::isfinite(p[c])) {
+                    throw InputError(t.path + ": texture pixel (" + std::to_string(x) + ", " +
+                                     std::to_string(source_row) + ") is not finite");
+                }
+                t.rgb[(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                       static_cast<std::size_t>(x)) *
+                          3 +
+                      static_cast<std::size_t>(c)] = srgb ? srgb_to_linear(p[c]) : p[c];
+            }
+        }
+    }
+    return t;
+}
+
 glm::vec3 Texture::texel(int x, int y) const {
     const std::size_t i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
                            static_cast<std::size_t>(x)) *

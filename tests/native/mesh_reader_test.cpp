@@ -1,5 +1,6 @@
 // Mesh readers: the OBJ/MTL/texture test data of shared/data/meshes, PLY meshes, and errors
 // that name the file and line.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -120,6 +121,47 @@ TEST(MeshReader, ObjErrorsNameFileAndLine) {
     const std::string bad_v = temp_file("bad_v.obj", "v 0 zero 0\n");
     EXPECT_THROW((void)read_obj(bad_v), InputError);
     EXPECT_THROW((void)read_mesh(temp_file("x.stl", "")), InputError);
+}
+
+TEST(MeshReader, GeoreferencedObjKeepsMillimetres) {
+    // UTM-sized coordinates: float32 alone would round y = 5400000.123 to 5400000.0 (spacing
+    // 0.5 m there). Read in double, offset by the rounded bbox centre, the millimetres survive.
+    const std::string path = temp_file("utm.obj", "v 512000.001 5400000.123 230.5\n"
+                                                  "v 512003.002 5400000.123 230.5\n"
+                                                  "v 512000.001 5400004.125 232.75\n"
+                                                  "f 1 2 3\n");
+    const Mesh m = read_obj(path);
+    EXPECT_EQ(m.world_offset, glm::dvec3(512002.0, 5400002.0, 232.0));
+    const glm::dvec3 first = m.world_offset + glm::dvec3(m.vertices[0]);
+    const glm::dvec3 third = m.world_offset + glm::dvec3(m.vertices[2]);
+    EXPECT_NEAR(first.x, 512000.001, 1e-6);
+    EXPECT_NEAR(first.y, 5400000.123, 1e-6);
+    EXPECT_NEAR(third.y, 5400004.125, 1e-6);
+    EXPECT_NEAR(third.z, 232.75, 1e-6);
+}
+
+TEST(MeshReader, MeshNearOriginHasNoOffset) {
+    const std::string path =
+        temp_file("small.obj", "v -1000 0 0\nv 1000 0 0\nv 0 1 1023\nf 1 2 3\n");
+    EXPECT_EQ(read_obj(path).world_offset, glm::dvec3(0.0));
+}
+
+TEST(MeshReader, NonFiniteVertexIsAnError) {
+    EXPECT_THROW((void)read_obj(temp_file("nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")),
+                 InputError);
+}
+
+TEST(MeshReader, TextureFromPixelsBottomUpAndSrgb) {
+    // 1×2 pixels bottom-up as Blender holds them: row 0 (bottom) grey 0.5 sRGB, row 1 (top) red.
+    const float pixels[] = {0.5f, 0.5f, 0.5f, 1.0f, 1.0f, 0.0f, 0.0f, 1.0f};
+    const Texture t = Texture::from_pixels("t", 1, 2, pixels, 4, true, true);
+    EXPECT_NEAR(t.texel(0, 0).x, 1.0f, 1e-6f); // top row of the texture = red
+    EXPECT_NEAR(t.texel(0, 1).x, srgb_to_linear(0.5f), 1e-6f);
+    const Texture linear = Texture::from_pixels("t", 1, 2, pixels, 4, false, false);
+    EXPECT_NEAR(linear.texel(0, 0).x, 0.5f, 1e-6f);
+    const float bad[] = {NAN, 0.0f, 0.0f};
+    EXPECT_THROW((void)Texture::from_pixels("t", 1, 1, bad, 3, true, true), InputError);
+    EXPECT_THROW((void)Texture::from_pixels("t", 0, 1, pixels, 4, true, true), InputError);
 }
 
 TEST(MeshReader, PlyAsciiAndBinaryAgree) {

@@ -53,7 +53,11 @@ struct Mesh {
     // Linear base colour of triangle `tri` at barycentrics (u, v) (p = (1-u-v)·v0 + u·v1 +
     // v·v2): texture at the interpolated uv × material colour × interpolated vertex colour.
     [[nodiscard]] glm::vec3 base_color(std::size_t tri, float u, float v) const;
-    // Throws InputError when indices or per-triangle arrays are inconsistent.
+    // Sets `vertices` from world positions read in double: chooses the world offset by the
+    // rule scans use (world_offset.hpp) and stores positions relative to it.
+    void set_world_vertices(const std::vector<glm::dvec3>& world);
+    // Throws InputError when indices or per-triangle arrays are inconsistent or a vertex is not
+    // finite.
     void validate(const std::string& where) const;
 };
 

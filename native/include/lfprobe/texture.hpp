@@ -19,6 +19,13 @@ struct Texture {
 
     // Throws IoError when the file is missing, InputError when stb cannot decode it.
     [[nodiscard]] static Texture load(const std::string& path);
+    // From float pixels as an image editor holds them (`channels` 3 or 4 per pixel, alpha
+    // ignored): `srgb` values are sRGB-encoded and decoded here, else linear; `bottom_up` means
+    // row 0 is the bottom row (Blender's Image.pixels). Throws InputError on bad sizes or
+    // non-finite values.
+    [[nodiscard]] static Texture from_pixels(std::string name, int width, int height,
+                                             const float* pixels, int channels, bool srgb,
+                                             bool bottom_up);
 
     // Linear colour at OBJ texture coordinates uv: u right, v UP (so v = 0 is the bottom row
     // of the image file), texel centres at ((x + 0.5) / w, 1 - (y + 0.5) / h); bilinear with
