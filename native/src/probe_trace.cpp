@@ -283,20 +283,41 @@ private:
         return kInf;
     }
 
-    // The fine index after every edge crossed up to t_exit: the same comparisons the fine walk
-    // makes, so that a skip lands exactly where the fine walk would be.
+    // The fine index after every edge crossed up to t_exit: the count of edges the ray crosses
+    // by then, as the fine walk's own comparisons count them, so that a skip lands exactly where
+    // the fine walk would be. Crossing times grow with the edge index along the walk's
+    // direction, so the search starts at the texel under p(t_exit) and settles with a few
+    // comparisons instead of testing every edge a long skip passes.
     [[nodiscard]] int advance(const OctantMap& m, const OctantCoordinate& c, int index,
                               double t_exit) const {
+        if (c.step == 0) {
+            return index;
+        }
+        const double den = m.den0 + t_exit * m.den1;
+        double p = den > 0.0 ? (c.num0 + t_exit * c.num1) / den : 0.0;
+        if (!std::isfinite(p)) {
+            p = 0.0;
+        }
+        const double g = (0.5 * std::clamp(p, -1.0, 1.0) + 0.5) * static_cast<double>(n_);
+        int guess = std::clamp(static_cast<int>(std::floor(g)), 0, n_ - 1);
         if (c.step > 0) {
-            while (index + 1 < n_ && crossing(m, c, index + 1) <= t_exit) {
-                ++index;
+            guess = std::max(guess, index);
+            while (guess > index && !(crossing(m, c, guess) <= t_exit)) {
+                --guess;
             }
-        } else if (c.step < 0) {
-            while (index > 0 && crossing(m, c, index) <= t_exit) {
-                --index;
+            while (guess + 1 < n_ && crossing(m, c, guess + 1) <= t_exit) {
+                ++guess;
+            }
+        } else {
+            guess = std::min(guess, index);
+            while (guess < index && !(crossing(m, c, guess + 1) <= t_exit)) {
+                ++guess;
+            }
+            while (guess > 0 && crossing(m, c, guess) <= t_exit) {
+                --guess;
             }
         }
-        return index;
+        return guess;
     }
 
     // The texel index of coordinate `c` at t_eval. Next to an edge the crossing time decides,
@@ -442,10 +463,11 @@ double surface_thickness(const TraceSettings& settings, double distance, int n) 
            settings.thickness_texels * kTexelAngleTimesN / static_cast<double>(n) * distance;
 }
 
-ProbeTraceResult lookup_probe(const ProbeMap& map, const glm::dvec3& direction, double t_min,
-                              double t_max, const TraceSettings& settings) {
-    check_inputs(map, direction);
-    const glm::dvec3 d = glm::normalize(direction);
+namespace {
+
+// The lookup for a unit direction `d` whose inputs are already checked.
+ProbeTraceResult lookup_unit_direction(const ProbeMap& map, const glm::dvec3& d, double t_min,
+                                       double t_max, const TraceSettings& settings) {
     Tracer tracer(map, nullptr, glm::dvec3(0.0), d, settings);
     const oct::Texel texel = oct::texel_of_direction(glm::vec3(d), map.resolution);
     if (!(t_max > t_min) || !tracer.visit_texel(texel.x, texel.y, t_min, t_max)) {
@@ -454,13 +476,21 @@ ProbeTraceResult lookup_probe(const ProbeMap& map, const glm::dvec3& direction, 
     return tracer.result();
 }
 
+} // namespace
+
+ProbeTraceResult lookup_probe(const ProbeMap& map, const glm::dvec3& direction, double t_min,
+                              double t_max, const TraceSettings& settings) {
+    check_inputs(map, direction);
+    return lookup_unit_direction(map, glm::normalize(direction), t_min, t_max, settings);
+}
+
 ProbeTraceResult trace_probe(const ProbeMap& map, const MinDistancePyramid* levels, const Ray& ray,
                              const TraceSettings& settings) {
     check_inputs(map, ray.direction);
     const glm::dvec3 d = glm::normalize(ray.direction);
     const glm::dvec3& o = ray.origin;
     if (glm::length(o) <= settings.eye_at_probe_distance) {
-        return lookup_probe(map, d, ray.t_min, ray.t_max, settings);
+        return lookup_unit_direction(map, d, ray.t_min, ray.t_max, settings);
     }
     Tracer tracer(map, levels, o, d, settings);
     const double t_lo = ray.t_min;

@@ -304,3 +304,30 @@ TEST(Render, EyeAtAProbeIsOneLookupPerRay) {
         EXPECT_LT(stats.mean_probes(), 1.01);
     }
 }
+
+namespace lfprobe {
+namespace {
+
+TEST(Render, TraceThroughputTracesTheSameRaysAsTheImage) {
+    // The throughput figure (compared with Embree's) must come from the very traces the image
+    // shows: same hit count, for an eye between probes and an eye at a probe.
+    const ProbeField& field = baked_box_room();
+    const glm::dvec3 at_probe = field.probe(3).position;
+    for (const Camera& camera :
+         {Camera::look_at({0.3, -0.2, 1.1}, {-1.0, 0.4, 0.9}, 48, 32, 18.0),
+          Camera::look_at(at_probe, at_probe + glm::dvec3(-1.0, 0.4, -0.2), 48, 32, 18.0)}) {
+        RenderStats stats;
+        (void)render_probe_view(field, camera, {}, nullptr, &stats);
+        const ThroughputResult t = probe_trace_throughput(field, camera, {}, 2);
+        EXPECT_EQ(t.rays, stats.rays);
+        EXPECT_EQ(t.hits, stats.hits);
+        EXPECT_EQ(t.repeats, 2);
+        EXPECT_GT(t.rays_per_second, 0.0);
+    }
+    EXPECT_THROW(
+        (void)probe_trace_throughput(field, Camera::look_at({0, 0, 1}, {1, 0, 1}, 4, 4), {}, 0),
+        InputError);
+}
+
+} // namespace
+} // namespace lfprobe

@@ -13,6 +13,7 @@
 #include "lfprobe/embree_scene.hpp"
 #include "lfprobe/image_exr.hpp"
 #include "lfprobe/progress.hpp"
+#include "lfprobe/throughput.hpp"
 
 namespace lfprobe {
 
@@ -52,13 +53,6 @@ struct GroundTruthStats {
 // pixel-centre rays are generated first, then only rtcIntersect1 over all of them is timed,
 // `repeats` times; the figures are of the fastest repeat (the least disturbed on a shared
 // machine). Runs on the threads of the calling TBB arena.
-struct ThroughputResult {
-    std::uint64_t rays = 0;
-    std::uint64_t hits = 0;
-    double seconds = 0.0;
-    double rays_per_second = 0.0;
-    int repeats = 0;
-};
 [[nodiscard]] ThroughputResult embree_throughput(const EmbreeScene& scene, const Camera& camera,
                                                  int repeats = 3);
 

@@ -12,6 +12,7 @@
 #include "lfprobe/image_exr.hpp"
 #include "lfprobe/probe_field.hpp"
 #include "lfprobe/progress.hpp"
+#include "lfprobe/throughput.hpp"
 
 namespace lfprobe {
 
@@ -53,6 +54,12 @@ struct RenderStats {
                                               const RenderSettings& settings = {},
                                               Progress* progress = nullptr,
                                               RenderStats* stats = nullptr);
+
+// Probe-trace throughput measured exactly as embree_throughput measures Embree's (throughput.hpp):
+// the same rays, trace only, so that the two figures make a fair ratio.
+[[nodiscard]] ThroughputResult probe_trace_throughput(const ProbeField& field, const Camera& camera,
+                                                      const RenderSettings& settings = {},
+                                                      int repeats = 3);
 
 // The counts of an image already rendered (status and steps channels; seconds left 0).
 [[nodiscard]] RenderStats stats_of(const RenderedImage& image);
