@@ -28,3 +28,6 @@ if ! PYTHONPATH="$pydeps" /usr/bin/python3 -c "import flip_evaluator" 2>/dev/nul
     "flip-evaluator==1.7"
 fi
 PYTHONPATH="$root/addon:$pydeps" /usr/bin/python3 -m pytest -q tests/python
+
+echo "== Blender add-on tests (Blender 3.4.1, the bpy wheel, a window under Xvfb) =="
+bash tools/blender_tests.sh

@@ -9,6 +9,7 @@ import sys
 import sysconfig
 
 _PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+_PACKAGE_NAME = __name__.rsplit(".", 2)[0]  # "lfprobe", or "bl_ext.<repo>.lfprobe"
 
 
 class NativeModuleError(ImportError):
@@ -34,6 +35,7 @@ def _diagnose() -> str:
 def load():
     """Returns the lfprobe._native module, or raises NativeModuleError with the reason."""
     try:
-        return importlib.import_module("lfprobe._native")
+        # Relative to this package: as a Blender extension it is bl_ext.<repo>.lfprobe.
+        return importlib.import_module("._native", _PACKAGE_NAME)
     except ImportError as error:
         raise NativeModuleError(f"{_diagnose()} (import said: {error})") from error

@@ -1,0 +1,247 @@
+"""Bake a probe grid: gathers the grid's sources (the full clouds of scan objects through the
+parse cache, or meshes through mesh_export), runs the native bake off the main thread (modal
+in the UI: progress bar, Esc cancels; synchronous in ``blender -b``) into a temporary folder
+beside the probe folder and renames it into place, so a cancelled or failed bake leaves the
+previous probe set as it was. Per-probe coverage from the manifest goes onto the grid."""
+
+import json
+import os
+import shutil
+
+import bpy
+import numpy as np
+from bpy.props import StringProperty
+
+from ..core import native, pipeline
+from ..core.probe_set import read_manifest
+from ..core.sources import default_cache_dir, describe_scan
+from . import grid as grid_module
+from . import scan_object
+from . import job_modal
+from .job_modal import NativeJobOperator
+
+
+class BakeInputError(ValueError):
+    """The grid cannot be baked as it is; the message says why and what to do."""
+
+
+def _is_identity(matrix) -> bool:
+    return all(abs(matrix[r][c] - (1.0 if r == c else 0.0)) < 1e-9 for r in range(4) for c in range(4))
+
+
+def gather_sources(grid_obj):
+    """(scan objects, mesh objects) the grid bakes from, checked."""
+    scans, meshes = [], []
+    for index, source in enumerate(grid_obj.lfprobe_grid.sources):
+        obj = source.obj
+        if obj is None:
+            raise BakeInputError(f"grid {grid_obj.name!r}: source {index + 1} is empty (pick an object or remove it)")
+        if obj.type != "MESH":
+            raise BakeInputError(f"grid {grid_obj.name!r}: source {obj.name!r} is a {obj.type}, not a scan cloud or mesh")
+        (scans if obj.lfprobe_scan.is_scan else meshes).append(obj)
+    if not scans and not meshes:
+        raise BakeInputError(
+            f"grid {grid_obj.name!r} has no sources: add scan clouds or meshes to bake from "
+            "(select them and the grid, then Add Selected as Sources)"
+        )
+    if scans and meshes:
+        raise BakeInputError(
+            f"grid {grid_obj.name!r} mixes scan clouds ({scans[0].name!r}) and meshes ({meshes[0].name!r}): "
+            "a probe set is baked from scans or from meshes, not both"
+        )
+    for obj in scans:
+        for path in obj.lfprobe_scan.paths():
+            if not os.path.isfile(path):
+                raise BakeInputError(f"scan cloud {obj.name!r}: its file {path} is missing (the full cloud is read from it)")
+    return scans, meshes
+
+
+def shared_scan_offset(scans) -> tuple:
+    """The local frame the scan objects share (an error when they do not)."""
+    offset = scans[0].lfprobe_scan.offset()
+    for obj in scans[1:]:
+        if obj.lfprobe_scan.offset() != offset:
+            raise BakeInputError(
+                f"scan clouds {scans[0].name!r} and {obj.name!r} have different world offsets "
+                f"({offset} and {obj.lfprobe_scan.offset()}): they are not in one frame"
+            )
+    return offset
+
+
+def probe_folder(grid_obj) -> str:
+    """The grid's probe folder, absolute; a path relative to an unsaved .blend is an error."""
+    path = grid_obj.lfprobe_grid.probe_dir or grid_module.default_probe_dir(grid_obj)
+    if path.startswith("//") and not bpy.data.filepath:
+        raise BakeInputError(
+            f"grid {grid_obj.name!r}: the probe folder {path} is relative to the .blend file, "
+            "which is not saved yet: save the .blend first, or set an absolute probe folder"
+        )
+    return grid_module.probe_dir_abspath(grid_obj)
+
+
+def _scan_cloud(loaded, scans):
+    """The loaded cloud moved by the scan objects' transforms, when any is moved."""
+    matrices = [obj.matrix_world for obj in scans]
+    if all(_is_identity(m) for m in matrices):
+        return loaded
+    _native = native.load()
+    positions = loaded.positions.astype(np.float64)
+    scan_index = loaded.scan_index
+    file_owner = [i for i, obj in enumerate(scans) for _ in obj.lfprobe_scan.paths()]
+    owner_of_point = np.asarray(file_owner, dtype=np.int64)[scan_index]
+    scanners = []
+    for file_index, scan in enumerate(loaded.scans):
+        matrix = np.array(matrices[file_owner[file_index]], dtype=np.float64)
+        members = owner_of_point == file_owner[file_index]
+        positions[members] = positions[members] @ matrix[:3, :3].T + matrix[:3, 3]
+        scanner = scan["scanner"]
+        scanners.append(None if scanner is None else list(matrix[:3, :3] @ np.asarray(scanner) + matrix[:3, 3]))
+    return _native.PointCloud.from_arrays(
+        positions.astype(np.float32),
+        colors=loaded.colors,
+        scan_index=scan_index,
+        scanners=scanners,
+        world_offset=list(loaded.world_offset),
+    )
+
+
+class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
+    """Bake the probe grid's light field probes from its sources (Esc cancels)"""
+
+    bl_idname = "object.lfprobe_bake"
+    bl_label = "Bake Probes"
+    bl_options = {"REGISTER"}
+    job_label = "Probe bake"
+
+    grid: StringProperty(name="Grid", description="Name of the grid object (empty: the active object)", default="")
+
+    @classmethod
+    def poll(cls, context):
+        # One bake at a time: two would share the cores and could write the same folder.
+        return cls.job_label not in job_modal.running_labels
+
+    def _grid_object(self, context):
+        if self.grid:
+            obj = bpy.data.objects.get(self.grid)
+            if obj is None:
+                raise BakeInputError(f"no object named {self.grid!r}")
+        else:
+            obj = context.active_object
+            if obj is None:
+                raise BakeInputError("no active object: select a probe grid to bake")
+        if not grid_module.is_grid(obj):
+            raise BakeInputError(f"{obj.name!r} is not a probe grid")
+        return obj
+
+    def execute(self, context):
+        return self.run_job(context)
+
+    def start_job(self, context):
+        self._staging = None
+        try:
+            _native = native.load()
+            grid_obj = self._grid_object(context)
+            low, high = grid_module.grid_box(grid_obj)
+            scans, meshes = gather_sources(grid_obj)
+            folder = probe_folder(grid_obj)
+            # World = offset + Blender position: the scans' frame, else the scene's (meshes).
+            frame = shared_scan_offset(scans) if scans else scan_object.frame_offset(context.scene)
+        except (BakeInputError, grid_module.GridError, native.NativeModuleError) as error:
+            self.report({"ERROR"}, f"Probe bake: {error}")
+            return None
+        self._grid_name = grid_obj.name
+        self._scans = scans
+        self._folder = folder
+        self._staging = folder.rstrip(os.sep) + ".baking"
+        self._offset = np.asarray(frame if frame is not None else (0.0, 0.0, 0.0), dtype=float)
+        grid = grid_obj.lfprobe_grid
+        self._placement = pipeline.ProbePlacementSpec(
+            grid_min=list(low + self._offset), grid_max=list(high + self._offset), counts=list(grid.counts)
+        )
+        self._options = pipeline.BakeOptions(resolution=grid.resolution)
+        shutil.rmtree(self._staging, ignore_errors=True)  # left by a crashed Blender
+        if meshes:
+            return self._start_mesh_bake(context, meshes)
+        paths = [p for obj in scans for p in obj.lfprobe_scan.paths()]
+        scanners = [s for obj in scans for s in obj.lfprobe_scan.scanners()]
+        self._paths = paths
+        self._step = "load"
+        # Scanner positions travel with the files (headers) or were given at import.
+        given = scanners if len(scanners) == len(paths) and all(s is not None for s in scanners) else []
+        return _native.start_load_scans(
+            paths, scanners=given, world_offset=list(self._offset), cache_dir=default_cache_dir()
+        )
+
+    def _start_mesh_bake(self, context, meshes):
+        from . import mesh_export  # engineer B's module: Blender meshes → native Mesh
+
+        _native = native.load()
+        try:
+            mesh = mesh_export.native_mesh_from_objects(
+                meshes, context.evaluated_depsgraph_get(), world_offset=list(self._offset)
+            )
+        except mesh_export.MeshExportError as error:
+            self.report({"ERROR"}, f"Probe bake: {error}")
+            return None
+        self._step = "bake"
+        sources = [{"kind": "blender-mesh", "objects": [obj.name for obj in meshes], "triangles": int(mesh.triangle_count)}]
+        return _native.start_bake_probe_set_from_mesh(
+            mesh,
+            self._staging,
+            resolution=self._options.resolution,
+            grid_min=self._placement.grid_min,
+            grid_max=self._placement.grid_max,
+            counts=self._placement.counts,
+            sources_json=json.dumps(sources),
+        )
+
+    def finish_job(self, context, result):
+        if self._step == "load":
+            cloud = _scan_cloud(result, self._scans)
+            sources = [
+                describe_scan(path, scan["points"], None if scan["scanner"] is None else list(np.add(scan["scanner"], self._offset)))
+                for path, scan in zip(self._paths, result.scans)
+            ]
+            self._step = "bake"
+            return pipeline.bake_from_cloud(
+                cloud, self._staging, self._placement, self._options, sources, start_only=True
+            )
+        self._install()
+        manifest = read_manifest(self._folder)
+        grid_obj = bpy.data.objects.get(self._grid_name)
+        if grid_obj is None or not grid_module.is_grid(grid_obj):
+            self.report({"WARNING"}, f"Baked into {self._folder}, but grid {self._grid_name!r} was removed meanwhile")
+            return {"FINISHED"}
+        grid = grid_obj.lfprobe_grid
+        grid.coverage_json = json.dumps([p.get("coverage", {}) for p in manifest["probes"]])
+        grid.baked = True
+        mean = result.get("mean_coverage", {})
+        self.report(
+            {"INFO"},
+            f"Baked {len(manifest['probes'])} probes into {self._folder}: "
+            f"{100 * mean.get('surface', 0):.0f}% surface, {100 * mean.get('unknown', 0):.0f}% unknown",
+        )
+        return {"FINISHED"}
+
+    def _install(self):
+        """Puts the finished probe set in place of the old one (renames, never half a set)."""
+        old = self._folder.rstrip(os.sep) + ".old"
+        shutil.rmtree(old, ignore_errors=True)
+        if os.path.exists(self._folder):
+            os.rename(self._folder, old)
+        os.rename(self._staging, self._folder)
+        self._staging = None
+        shutil.rmtree(old, ignore_errors=True)
+
+    def cleanup_job(self, context):
+        if getattr(self, "_staging", None):
+            shutil.rmtree(self._staging, ignore_errors=True)
+            self._staging = None
+
+
+def register():
+    bpy.utils.register_class(LFPROBE_OT_bake)
+
+
+def unregister():
+    bpy.utils.unregister_class(LFPROBE_OT_bake)

@@ -1,0 +1,278 @@
+"""Compare: the probe-traced view of the active camera against Embree ground truth of chosen
+reference meshes, measured with lfprobe.core.metrics, written as a report folder and shown
+in the Image Editor.
+
+The report folder holds camera.json, ground_truth.exr, probes.exr (both in the native EXR
+format of `./lfprobe gt` and `./lfprobe render`), their sRGB previews ground_truth.png and
+probes.png, error_flip.png (the FLIP error, magma) and
+compare.json: the object `./lfprobe compare --json` prints for the two images, plus the
+camera, grid, reference objects and the time of each render.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+import time
+
+import bpy
+import numpy as np
+from bpy.props import BoolProperty, IntProperty, StringProperty
+
+from ..core import metrics, native
+from ..core.camera_json import write_camera
+from ..core.cli_compare import _magma, _strict_json, write_png
+from . import camera_export, probe_view
+from .job_modal import NativeJobOperator
+from .mesh_export import MeshExportError, native_mesh_from_objects
+
+IMAGE_NAMES = {"ground_truth_preview": "LFP Ground Truth", "probes_preview": "LFP Probes", "error": "LFP FLIP Error"}
+
+
+class CompareError(ValueError):
+    """A compare that cannot run as asked (the message says why)."""
+
+
+def reference_objects(context_objects, collection_name: str = "") -> list:
+    """The mesh objects of the named collection (with its children), else the given objects'
+    meshes (the selection)."""
+    if collection_name:
+        collection = bpy.data.collections.get(collection_name)
+        if collection is None:
+            raise CompareError(f"no collection named '{collection_name}'")
+        objects = collection.all_objects
+    else:
+        objects = context_objects
+    meshes = [obj for obj in objects if obj.type == "MESH" and not obj.lfprobe_scan.is_scan]
+    if not meshes:
+        where = f"collection '{collection_name}'" if collection_name else "the selection"
+        raise CompareError(f"no reference meshes in {where}: select the meshes of the room "
+                           "(scan clouds are not references)")
+    return meshes
+
+
+def default_report_dir() -> str:
+    if not bpy.data.filepath:
+        raise CompareError("save the .blend first (the report goes next to it), or give an output folder")
+    stem = os.path.splitext(os.path.basename(bpy.data.filepath))[0]
+    return bpy.path.abspath(f"//{stem}_compare")
+
+
+def _srgb8(rgba) -> np.ndarray:
+    """Linear RGBA → 8-bit sRGB RGB for a PNG preview (alpha dropped: misses are black)."""
+    return (metrics.srgb_encode(rgba[..., :3]) * 255.0 + 0.5).astype(np.uint8)
+
+
+def _write_json(path: str, value) -> None:
+    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), prefix=".compare-", suffix=".tmp")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as stream:
+            json.dump(_strict_json(value), stream, indent=2, allow_nan=False)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+class ComparePlan:
+    """Everything a compare needs, gathered from the scene before any rendering starts, so
+    that bad input is reported before time is spent."""
+
+    def __init__(self, scene, depsgraph, references, out_dir: str, camera_obj=None, grid_name: str = "",
+                 spp: int = 1, ppd: float = 67.0):
+        if spp < 1 or int(round(spp ** 0.5)) ** 2 != spp:
+            raise CompareError(f"samples per pixel must be 1 or a square (4, 9, 16, ...), not {spp}")
+        self.grid = probe_view.grid_to_trace(scene, grid_name)
+        self.folder = probe_view.probe_folder(self.grid)
+        self.offset = probe_view.frame_offset(scene, self.grid)
+        self.camera = camera_export.camera_dict(scene, camera_obj, self.offset, depsgraph=depsgraph)
+        self.trace = probe_view.trace_settings(scene)
+        self.references = [obj.name for obj in references]
+        self.mesh = native_mesh_from_objects(references, depsgraph, world_offset=self.offset,
+                                             name="compare references")
+        self.out_dir = os.path.abspath(out_dir)
+        os.makedirs(self.out_dir, exist_ok=True)
+        self.paths = {
+            "camera": os.path.join(self.out_dir, "camera.json"),
+            "ground_truth": os.path.join(self.out_dir, "ground_truth.exr"),
+            "probes": os.path.join(self.out_dir, "probes.exr"),
+            "error": os.path.join(self.out_dir, "error_flip.png"),
+            "ground_truth_preview": os.path.join(self.out_dir, "ground_truth.png"),
+            "probes_preview": os.path.join(self.out_dir, "probes.png"),
+            "report": os.path.join(self.out_dir, "compare.json"),
+        }
+        self.spp = spp
+        self.ppd = ppd
+        write_camera(self.paths["camera"], self.camera)
+
+    def start_ground_truth(self):
+        return native.load().start_ground_truth(self.mesh, json.dumps(self.camera), self.paths["ground_truth"],
+                                                spp=self.spp, threads=self.trace["threads"])
+
+    def finish(self, gt_stats: dict) -> dict:
+        """Traces the probes, measures against the ground truth, writes the report."""
+        _native = native.load()
+        field = probe_view.load_field(self.folder)
+        _image, probe_stats = field.render(json.dumps(self.camera), output=self.paths["probes"], **self.trace)
+        reference = _native.read_image(self.paths["ground_truth"])
+        test = _native.read_image(self.paths["probes"])
+        start = time.perf_counter()
+        result, error_map = metrics.compare_images_with_map(reference, test, ppd=self.ppd)
+        result["compare_seconds"] = time.perf_counter() - start
+        write_png(self.paths["error"], _magma(error_map))
+        for key, image in (("ground_truth_preview", reference), ("probes_preview", test)):
+            write_png(self.paths[key], _srgb8(image["rgba"]))
+        result.update({
+            "reference": self.paths["ground_truth"],
+            "test": self.paths["probes"],
+            "error_map": self.paths["error"],
+            "ref_render_seconds": gt_stats.get("seconds"),
+            "test_render_seconds": probe_stats.get("seconds"),
+            "probe_rays_per_second": probe_stats.get("rays_per_second"),
+            "ground_truth_rays_per_second": gt_stats.get("rays_per_second"),
+            "camera": self.camera,
+            "grid": self.grid.name,
+            "probe_set": self.folder,
+            "reference_objects": self.references,
+            "trace": self.trace,
+            "spp": self.spp,
+        })
+        _write_json(self.paths["report"], result)
+        return result
+
+
+def run_compare(scene, depsgraph, references, out_dir: str, **options) -> dict:
+    """Compare to the end in one call (the batch CLI)."""
+    plan = ComparePlan(scene, depsgraph, references, out_dir, **options)
+    gt_stats = plan.start_ground_truth().run(None)
+    return plan.finish(gt_stats)
+
+
+def summary_line(result: dict) -> str:
+    def fmt(key, spec, unit=""):
+        value = result.get(key)
+        return "n/a" if value is None else f"{value:{spec}}{unit}"
+
+    psnr = "inf" if result.get("psnr") == float("inf") else fmt("psnr", ".2f", " dB")
+    return (f"PSNR {psnr}, SSIM {fmt('ssim', '.4f')}, FLIP {fmt('flip', '.4f')}, "
+            f"depth AbsRel {fmt('depth_absrel', '.4f')}, hole rate {fmt('hole_rate', '.3%')}, "
+            f"false hits {fmt('false_hit_rate', '.3%')}")
+
+
+def load_report_images(paths: dict) -> list:
+    """Loads (or reloads) the ground truth, probe and error previews into bpy.data.images
+    (PNG: Blender reads the native EXRs' analysis channels as an unknown multilayer layout)."""
+    images = []
+    for key in ("ground_truth_preview", "probes_preview", "error"):
+        path = paths[key]
+        image = next((i for i in bpy.data.images if bpy.path.abspath(i.filepath) == path), None)
+        if image is None:
+            image = bpy.data.images.load(path)
+        else:
+            image.reload()
+        image.name = IMAGE_NAMES[key]
+        images.append(image)
+    return images
+
+
+def show_in_image_editor(context, image) -> bool:
+    """Shows `image` in an Image Editor of the current screen, or in a new window; False
+    when there is no window (background)."""
+    if bpy.app.background or context.window is None:
+        return False
+    for area in context.screen.areas:
+        if area.type == "IMAGE_EDITOR":
+            area.spaces.active.image = image
+            return True
+    windows_before = set(context.window_manager.windows[:])
+    bpy.ops.wm.window_new()
+    new_windows = [w for w in context.window_manager.windows if w not in windows_before]
+    if not new_windows:
+        return False
+    area = max(new_windows[0].screen.areas, key=lambda a: a.width * a.height)
+    area.type = "IMAGE_EDITOR"
+    area.spaces.active.image = image
+    return True
+
+
+class LFPROBE_OT_compare(NativeJobOperator, bpy.types.Operator):
+    """Render ground truth of the reference meshes with Embree from the active camera, trace
+    the probes from the same camera, measure the error and open the images"""
+
+    bl_idname = "lfprobe.compare"
+    bl_label = "Compare with Ground Truth"
+    bl_options = {"REGISTER"}
+    job_label = "Ground truth"
+
+    collection: StringProperty(
+        name="Reference Collection",
+        description="Meshes of this collection are the reference (empty: the selected meshes)",
+        default="",
+    )
+    directory: StringProperty(
+        name="Report Folder",
+        description="Where the report is written (empty: <blend name>_compare next to the .blend)",
+        subtype="DIR_PATH",
+        default="",
+    )
+    spp: IntProperty(name="Samples per Pixel", description="Ground truth samples: 1 or a square",
+                     min=1, soft_max=64, default=1)
+    open_images: BoolProperty(name="Open Images", description="Show the images in an Image Editor",
+                              default=True)
+
+    _plan = None
+
+    @classmethod
+    def poll(cls, context):
+        return context.scene is not None
+
+    def execute(self, context):
+        return self.run_job(context)
+
+    def start_job(self, context):
+        scene = context.scene
+        try:
+            references = reference_objects(context.selected_objects, self.collection)
+            out_dir = bpy.path.abspath(self.directory) if self.directory else default_report_dir()
+            self._plan = ComparePlan(scene, context.evaluated_depsgraph_get(), references, out_dir,
+                                     spp=self.spp)
+            return self._plan.start_ground_truth()
+        except (CompareError, probe_view.TraceSetupError, camera_export.CameraExportError,
+                MeshExportError, OSError) as error:
+            self.report({"ERROR"}, f"Compare: {error}")
+            return None
+        except Exception as error:  # native input errors (e.g. a mesh Embree refuses)
+            self.report({"ERROR"}, f"Compare: {type(error).__name__}: {error}")
+            return None
+
+    def finish_job(self, context, result):
+        plan = self._plan
+        try:
+            report = plan.finish(result)
+        except Exception as error:
+            self.report({"ERROR"}, f"Compare: {type(error).__name__}: {error}")
+            return {"CANCELLED"}
+        images = load_report_images(plan.paths)
+        if self.open_images:
+            show_in_image_editor(context, images[1])
+        self.report({"INFO"}, f"Compare: {summary_line(report)}; report in {plan.paths['report']}")
+        return {"FINISHED"}
+
+    def cleanup_job(self, context):
+        self._plan = None
+
+
+def _menu_item(self, _context):
+    self.layout.operator(LFPROBE_OT_compare.bl_idname, icon="IMAGE_REFERENCE")
+
+
+def register():
+    bpy.utils.register_class(LFPROBE_OT_compare)
+    bpy.types.TOPBAR_MT_render.append(_menu_item)
+
+
+def unregister():
+    bpy.types.TOPBAR_MT_render.remove(_menu_item)
+    bpy.utils.unregister_class(LFPROBE_OT_compare)

@@ -1,0 +1,300 @@
+"""The render engine "Light Field Probes": F12 and the Rendered viewport trace the scene's
+baked probe grid (never its geometry).
+
+F12 traces the active camera at the render size and writes Combined (RGBA: linear colour,
+coverage), Depth (distance along the ray, +inf where nothing is hit, as the native EXR's Z)
+and three trace passes: "LFP Status" (0 MISS, 1 HIT, 2 UNKNOWN), "LFP Probe" (the probe that
+answered, −1 none) and "LFP Steps" (texels visited). The image is the one `./lfprobe render`
+writes for the same camera JSON.
+
+The viewport refines progressively in a worker thread (viewport.py) and draws the latest
+level as a texture, sRGB-encoded here (the scene's view transform is not applied to it).
+"""
+
+from __future__ import annotations
+
+import json
+import traceback
+
+import bpy
+import numpy as np
+from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
+
+from . import camera_export, grid as grid_module, probe_view
+from .viewport import ProgressiveView
+
+TRACE_PASSES = (("LFP Status", "status"), ("LFP Probe", "probe"), ("LFP Steps", "steps"))
+
+
+def _grid_poll(_settings, obj):
+    return grid_module.is_grid(obj)
+
+
+def _redraw_viewports(_settings, context):
+    # Trace settings are not part of the depsgraph: tag the views so that they refine again.
+    for area in getattr(context.screen, "areas", ()):
+        if area.type == "VIEW_3D":
+            area.tag_redraw()
+
+
+class LFProbeRenderSettings(bpy.types.PropertyGroup):
+    grid: PointerProperty(
+        name="Probe Grid",
+        type=bpy.types.Object,
+        poll=_grid_poll,
+        description="The baked probe grid to trace (empty: the first baked grid, by name)",
+        update=_redraw_viewports,
+    )
+    mode: EnumProperty(
+        name="Probe Order",
+        items=(
+            ("auto", "Auto", "Walk the grid's cells for a grid set, nearest probes first otherwise"),
+            ("nearest", "Nearest", "Try the probes nearest the ray first"),
+            ("grid", "Grid Walk", "Walk the cells the ray crosses (3D DDA) and try their corner probes"),
+        ),
+        default="auto",
+        update=_redraw_viewports,
+    )
+    thickness: FloatProperty(
+        name="Thickness",
+        description="How far behind the surface a probe saw a ray still counts as hitting it",
+        min=0.0,
+        soft_max=0.2,
+        default=0.02,
+        unit="LENGTH",
+        precision=3,
+        update=_redraw_viewports,
+    )
+    threads: IntProperty(
+        name="Threads",
+        description="CPU cores to trace with (0: all); the image is the same for any count",
+        min=0,
+        soft_max=64,
+        default=0,
+        update=_redraw_viewports,
+    )
+
+
+def _to_bottom_up(array: np.ndarray, channels: int) -> np.ndarray:
+    """A native image (top row first) as a render pass's rect (bottom row first, (h·w, c))."""
+    flipped = np.ascontiguousarray(array[::-1], dtype=np.float32)
+    return flipped.reshape(-1, channels)
+
+
+def _srgb_display(rgba: np.ndarray) -> np.ndarray:
+    """Linear premultiplied RGBA → sRGB-encoded RGBA, bottom row first, for the viewport texture."""
+    rgb = np.clip(rgba[..., :3], 0.0, 1.0)
+    encoded = np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * np.power(rgb, 1.0 / 2.4) - 0.055)
+    out = np.empty(rgba.shape, dtype=np.float32)
+    out[..., :3] = encoded
+    out[..., 3] = np.clip(rgba[..., 3], 0.0, 1.0)
+    return np.ascontiguousarray(out[::-1])
+
+
+_last_drawn_view = [None]  # the ProgressiveView a viewport drew last (for viewport_stats)
+
+
+def viewport_stats():
+    """Refinement timings (viewport.RefineStats) of the viewport drawn last, or None: what
+    tools/screenshots.py reports as the viewport's refinement speed."""
+    view = _last_drawn_view[0]
+    return view.stats() if view is not None else None
+
+
+class LFProbeRenderEngine(bpy.types.RenderEngine):
+    bl_idname = "LFPROBE"
+    bl_label = "Light Field Probes"
+    bl_use_preview = False
+    bl_use_eevee_viewport = True  # Material Preview shading stays EEVEE's
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._view = None
+        self._texture = None
+        self._texture_image = None
+        self._view_error = None
+
+    def __del__(self):
+        view = getattr(self, "_view", None)
+        if view is not None:
+            view.stop()
+            if _last_drawn_view[0] is view:
+                _last_drawn_view[0] = None
+
+    # F12 ------------------------------------------------------------------------------
+
+    def update_render_passes(self, scene=None, renderlayer=None):
+        self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
+        self.register_pass(scene, renderlayer, "Depth", 1, "Z", "VALUE")
+        for name, _key in TRACE_PASSES:
+            self.register_pass(scene, renderlayer, name, 1, "X", "VALUE")
+
+    def render(self, depsgraph):
+        scene = depsgraph.scene
+        try:
+            image = self._trace_frame(scene, depsgraph)
+        except (probe_view.TraceSetupError, camera_export.CameraExportError) as error:
+            self._fail(str(error))
+            return
+        except Exception as error:  # a native error, or a bug: reported, never raised into Blender
+            traceback.print_exc()
+            self._fail(f"{type(error).__name__}: {error}")
+            return
+        self._write_result(depsgraph, image)
+
+    def _trace_frame(self, scene, depsgraph):
+        grid_obj = probe_view.grid_to_trace(scene)
+        folder = probe_view.probe_folder(grid_obj)
+        offset = probe_view.frame_offset(scene, grid_obj)
+        camera = camera_export.camera_dict(scene, scene.camera, offset, depsgraph=depsgraph)
+        self.update_stats("", f"Light Field Probes: loading {grid_obj.name}")
+        field = probe_view.load_field(folder)
+        if self.test_break():
+            return None
+        width, height = camera["resolution"]
+        self.update_stats("", f"Light Field Probes: tracing {width}×{height} through {field.probe_count} probes")
+        image, stats = field.render(json.dumps(camera), **probe_view.trace_settings(scene))
+        rays = max(int(stats["rays"]), 1)
+        self.update_stats("", f"Light Field Probes: {stats['seconds'] * 1000:.0f} ms, "
+                              f"{stats['rays_per_second'] / 1e6:.2f} M rays/s, HIT {100 * stats['hits'] / rays:.1f}%")
+        return image
+
+    def _write_result(self, depsgraph, image) -> None:
+        if image is None:
+            return
+        height, width = image["rgba"].shape[:2]
+        layer_name = depsgraph.view_layer.name
+        for name, _key in TRACE_PASSES:
+            self.add_pass(name, 1, "X", layer=layer_name)
+        if not depsgraph.view_layer.use_pass_z:
+            self.add_pass("Depth", 1, "Z", layer=layer_name)
+        result = self.begin_result(0, 0, width, height, layer=layer_name)
+        try:
+            layer = result.layers[0]
+            layer.passes["Combined"].rect = _to_bottom_up(image["rgba"], 4)
+            layer.passes["Depth"].rect = _to_bottom_up(image["depth"], 1)
+            for name, key in TRACE_PASSES:
+                layer.passes[name].rect = _to_bottom_up(image[key].astype(np.float32), 1)
+        finally:
+            self.end_result(result)
+
+    def _fail(self, message: str) -> None:
+        self.report({"ERROR"}, f"Light Field Probes: {message}")
+        if hasattr(self, "error_set"):
+            self.error_set(f"Light Field Probes: {message}")
+        self.update_stats("", f"Light Field Probes: {message}")
+
+    # Viewport ---------------------------------------------------------------------------
+
+    def view_update(self, context, depsgraph):
+        # A changed grid (moved, re-baked) shows through the draw's request key; nothing here
+        # needs the depsgraph, but the redraw tells view_draw to look again.
+        self.tag_redraw()
+
+    def view_draw(self, context, depsgraph):
+        scene = depsgraph.scene
+        region, region_data = context.region, context.region_data
+        width, height = region.width, region.height
+        if self._view is None:
+            self._view = ProgressiveView(self.tag_redraw)
+        try:
+            self._request_view(scene, region_data, width, height)
+            self._view_error = None
+        except (probe_view.TraceSetupError, camera_export.CameraExportError) as error:
+            self._view_error = str(error)
+        message = self._view_error or self._view.error()
+        if message:
+            self.update_stats("", f"Light Field Probes: {message}")
+            return
+        latest = self._view.latest()
+        if latest is None:
+            return
+        _last_drawn_view[0] = self._view
+        self._draw_image(scene, latest, width, height)
+        timings = self._view.stats().levels
+        if timings:
+            last = timings[-1]
+            state = "done" if latest.final else "refining"
+            self.update_stats("", f"Light Field Probes: {state}, 1/{last.level} size in "
+                                  f"{last.since_request * 1000:.0f} ms")
+
+    def _request_view(self, scene, region_data, width, height) -> None:
+        grid_obj = probe_view.grid_to_trace(scene)
+        folder = probe_view.probe_folder(grid_obj)
+        offset = probe_view.frame_offset(scene, grid_obj)
+        camera = camera_export.viewport_camera_dict(region_data, width, height, offset)
+        field = probe_view.load_field(folder)
+        trace = probe_view.trace_settings(scene)
+        key = (json.dumps(camera, sort_keys=True), id(field), tuple(sorted(trace.items())))
+        self._view.request(field, camera, width, height, trace, key)
+
+    def _draw_image(self, scene, view_image, width, height) -> None:
+        import gpu
+        from gpu_extras.presets import draw_texture_2d
+
+        if self._texture_image is not view_image:
+            pixels = _srgb_display(view_image.rgba)
+            h, w = pixels.shape[:2]
+            buffer = gpu.types.Buffer("FLOAT", w * h * 4, pixels.ravel())
+            self._texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=buffer)
+            self._texture_image = view_image
+        gpu.state.blend_set("ALPHA_PREMULT")
+        draw_texture_2d(self._texture, (0, 0), width, height)
+        gpu.state.blend_set("NONE")
+
+
+class RENDER_PT_lfprobe_trace(bpy.types.Panel):
+    bl_label = "Light Field Probes"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "render"
+    COMPAT_ENGINES = {LFProbeRenderEngine.bl_idname}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        settings = context.scene.lfprobe_render
+        layout.prop(settings, "grid")
+        if settings.grid is None:
+            baked = grid_module.baked_grids(context.scene)
+            layout.label(text=f"Tracing: {baked[0].name}" if baked else "No baked probe grid",
+                         icon="INFO" if baked else "ERROR")
+        layout.prop(settings, "mode")
+        layout.prop(settings, "thickness")
+        layout.prop(settings, "threads")
+
+
+# Blender's own panels that apply to any engine (output, dimensions, camera lens, ...) list
+# the engines they show for, with "BLENDER_RENDER" standing for external engines.
+_SHARED_PANEL_EXCLUDE = {"RENDER_PT_color_management", "RENDER_PT_simplify"}
+
+
+def _shared_panels():
+    for panel in bpy.types.Panel.__subclasses__():
+        engines = getattr(panel, "COMPAT_ENGINES", None)
+        if engines is not None and "BLENDER_RENDER" in engines and panel.__name__ not in _SHARED_PANEL_EXCLUDE:
+            yield panel
+
+
+_CLASSES = (LFProbeRenderSettings, LFProbeRenderEngine, RENDER_PT_lfprobe_trace)
+
+
+def register():
+    for cls in _CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.lfprobe_render = PointerProperty(type=LFProbeRenderSettings)
+    for panel in _shared_panels():
+        panel.COMPAT_ENGINES.add(LFProbeRenderEngine.bl_idname)
+
+
+def unregister():
+    for panel in _shared_panels():
+        panel.COMPAT_ENGINES.discard(LFProbeRenderEngine.bl_idname)
+    del bpy.types.Scene.lfprobe_render
+    for cls in reversed(_CLASSES):
+        bpy.utils.unregister_class(cls)
+    probe_view.forget_fields()

@@ -1,0 +1,123 @@
+"""Object properties panels: a scan cloud's facts (points, world offset, files, scanners) and
+a probe grid's settings, sources, probe folder and bake state."""
+
+from __future__ import annotations
+
+import os
+import textwrap
+
+import bpy
+
+from ..core import native
+from . import grid as grid_module
+
+
+def _native_problem(layout) -> None:
+    """Says in the panel when the native module cannot load (the operators would fail)."""
+    try:
+        native.load()
+    except native.NativeModuleError as error:
+        column = layout.column(align=True)
+        column.alert = True
+        for line in textwrap.wrap(str(error), 60):
+            column.label(text=line)
+
+
+def _format_offset(offset) -> str:
+    return ", ".join(f"{v:.6f}".rstrip("0").rstrip(".") for v in offset)
+
+
+class LFPROBE_PT_scan(bpy.types.Panel):
+    bl_label = "Scan Cloud"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "object"
+
+    @classmethod
+    def poll(cls, context):
+        obj = context.object
+        return obj is not None and obj.type == "MESH" and obj.lfprobe_scan.is_scan
+
+    def draw(self, context):
+        props = context.object.lfprobe_scan
+        layout = self.layout
+        _native_problem(layout)
+        column = layout.column(align=True)
+        column.label(text=f"Points: {props.point_count:,} ({props.display_count:,} displayed)")
+        offset = props.offset()
+        column.label(text=f"World offset: {_format_offset(offset)}")
+        if any(offset):
+            column.label(text="World = offset + Blender position (georeferenced)", icon="INFO")
+        box = layout.box()
+        box.label(text="Files")
+        scanners = props.scanners()
+        for index, path in enumerate(props.paths()):
+            row = box.row()
+            row.label(text=os.path.basename(path), icon="FILE" if os.path.isfile(path) else "ERROR")
+            scanner = scanners[index] if index < len(scanners) else None
+            row.label(text="scanner " + (_format_offset(scanner) if scanner is not None else "unknown"))
+
+
+class LFPROBE_UL_grid_sources(bpy.types.UIList):
+    def draw_item(self, _context, layout, _data, item, _icon, _active_data, _active_property, _index=0, _flt_flag=0):
+        obj = item.obj
+        if obj is None:
+            layout.label(text="(empty)", icon="ERROR")
+        else:
+            layout.label(text=obj.name, icon="POINTCLOUD_DATA" if obj.lfprobe_scan.is_scan else "MESH_DATA")
+
+
+class LFPROBE_PT_grid(bpy.types.Panel):
+    bl_label = "Light Field Probe Grid"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "object"
+
+    @classmethod
+    def poll(cls, context):
+        return grid_module.is_grid(context.object)
+
+    def draw(self, context):
+        obj = context.object
+        grid = obj.lfprobe_grid
+        layout = self.layout
+        _native_problem(layout)
+        layout.use_property_split = True
+        try:
+            grid_module.grid_box(obj)
+        except grid_module.GridError as error:
+            layout.label(text=str(error), icon="ERROR")
+        layout.prop(grid, "counts")
+        layout.prop(grid, "resolution")
+        layout.prop(grid, "coarse_resolution")
+        layout.label(text="Sources")
+        row = layout.row()
+        row.template_list("LFPROBE_UL_grid_sources", "", grid, "sources", grid, "active_source_index", rows=3)
+        buttons = row.column(align=True)
+        buttons.operator("object.lfprobe_grid_source_add", icon="ADD", text="")
+        buttons.operator("object.lfprobe_grid_source_remove", icon="REMOVE", text="")
+        layout.operator("object.lfprobe_grid_fit", icon="FULLSCREEN_ENTER")
+        layout.prop(grid, "probe_dir")
+        layout.operator("object.lfprobe_bake", icon="RENDER_STILL").grid = obj.name
+        coverage = grid.coverage()
+        if grid.baked and coverage:
+            known = sum(1.0 - c.get("unknown", 1.0) for c in coverage) / len(coverage)
+            layout.label(text=f"Baked: {len(coverage)} probes, {100 * known:.0f}% of directions known", icon="CHECKMARK")
+            counts = tuple(grid.counts)
+            if len(coverage) != counts[0] * counts[1] * counts[2]:
+                layout.label(text="The counts changed since the bake: bake again", icon="INFO")
+        else:
+            layout.label(text="Not baked")
+
+
+_CLASSES = (LFPROBE_PT_scan, LFPROBE_UL_grid_sources, LFPROBE_PT_grid)
+
+
+def register():
+    for cls in _CLASSES:
+        bpy.utils.register_class(cls)
+
+
+def unregister():
+    for cls in reversed(_CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,141 @@
+"""The add-on's data model: what a scan cloud object and a probe grid object carry.
+
+Scan cloud: a mesh of vertices only (a display subsample of the cloud) with its colours in
+the point attribute "Col" and ``obj.lfprobe_scan``. Probe grid: an Empty whose cube
+[-1, 1]^3, transformed by its location and scale, is the grid's box, with ``obj.lfprobe_grid``.
+The engine's scene settings (``scene.lfprobe_render``) belong to engine.py.
+"""
+
+import json
+
+import bpy
+from bpy.props import (
+    BoolProperty,
+    CollectionProperty,
+    FloatVectorProperty,
+    IntProperty,
+    IntVectorProperty,
+    PointerProperty,
+    StringProperty,
+)
+
+COLOR_ATTRIBUTE = "Col"
+
+# Blender 4.5+ warns about "//" in path properties unless they say they support it.
+_BLEND_RELATIVE = {"PATH_SUPPORTS_BLEND_RELATIVE"} if bpy.app.version >= (4, 5, 0) else set()
+
+
+class LFProbeScanProperties(bpy.types.PropertyGroup):
+    is_scan: BoolProperty(name="Is Scan Cloud", default=False)
+    source_paths: StringProperty(
+        name="Source Files", description="JSON list of the absolute paths of the scan files", default="[]"
+    )
+    point_count: IntProperty(name="Points", description="Points in the full cloud", min=0)
+    display_count: IntProperty(
+        name="Displayed", description="Points in the display subsample (the object's vertices)", min=0
+    )
+    world_offset: FloatVectorProperty(
+        name="World Offset",
+        description="World position of the object's origin (world = offset + local); single precision, "
+        "see world_offset_json for the exact value",
+        size=3,
+        subtype="TRANSLATION",
+        unit="LENGTH",
+    )
+    world_offset_json: StringProperty(
+        name="World Offset (exact)", description="The world offset in double precision, as JSON", default="[0, 0, 0]"
+    )
+    scanner_positions_json: StringProperty(
+        name="Scanner Positions",
+        description="JSON list with one world position (or null) per source file",
+        default="[]",
+    )
+    bounds_min: FloatVectorProperty(
+        name="Bounds Min", description="Lower corner of the full cloud, local frame", size=3, subtype="XYZ"
+    )
+    bounds_max: FloatVectorProperty(
+        name="Bounds Max", description="Upper corner of the full cloud, local frame", size=3, subtype="XYZ"
+    )
+
+    def paths(self) -> list:
+        return list(json.loads(self.source_paths or "[]"))
+
+    def offset(self) -> tuple:
+        """The world offset in double precision."""
+        return tuple(float(v) for v in json.loads(self.world_offset_json or "[0, 0, 0]"))
+
+    def scanners(self) -> list:
+        return list(json.loads(self.scanner_positions_json or "[]"))
+
+
+class LFProbeGridSource(bpy.types.PropertyGroup):
+    obj: PointerProperty(
+        name="Object",
+        type=bpy.types.Object,
+        description="A scan cloud or a mesh to bake the probes from",
+        poll=lambda _self, obj: obj.type == "MESH",
+    )
+
+
+class LFProbeGridProperties(bpy.types.PropertyGroup):
+    is_grid: BoolProperty(name="Is Probe Grid", default=False)
+    counts: IntVectorProperty(
+        name="Counts",
+        description="Probes along X, Y and Z; the corner probes sit on the box corners",
+        size=3,
+        min=1,
+        soft_max=64,
+        default=(2, 2, 2),
+    )
+    resolution: IntProperty(
+        name="Resolution",
+        description="Octahedral map size of each probe (texels per side)",
+        min=8,
+        soft_max=4096,
+        default=512,
+    )
+    coarse_resolution: IntProperty(
+        name="Coarse Resolution",
+        description="Size of the coarsest min-distance level the trace starts from (0 = automatic)",
+        min=0,
+        soft_max=512,
+        default=0,
+    )
+    sources: CollectionProperty(type=LFProbeGridSource, name="Sources")
+    active_source_index: IntProperty(name="Active Source", default=0)
+    probe_dir: StringProperty(
+        name="Probe Folder",
+        description="Where the probe set is written; // is the folder of the .blend",
+        subtype="DIR_PATH",
+        options=_BLEND_RELATIVE,
+        default="",
+    )
+    baked: BoolProperty(name="Baked", default=False)
+    coverage_json: StringProperty(
+        name="Coverage",
+        description="Per-probe coverage after baking (JSON list of {surface, inferred, empty, unknown})",
+        default="[]",
+    )
+
+    def coverage(self) -> list:
+        try:
+            return list(json.loads(self.coverage_json or "[]"))
+        except ValueError:
+            return []
+
+
+_CLASSES = (LFProbeScanProperties, LFProbeGridSource, LFProbeGridProperties)
+
+
+def register():
+    for cls in _CLASSES:
+        bpy.utils.register_class(cls)
+    bpy.types.Object.lfprobe_scan = PointerProperty(type=LFProbeScanProperties)
+    bpy.types.Object.lfprobe_grid = PointerProperty(type=LFProbeGridProperties)
+
+
+def unregister():
+    del bpy.types.Object.lfprobe_grid
+    del bpy.types.Object.lfprobe_scan
+    for cls in reversed(_CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,0 +1,179 @@
+"""File › Import › Scan Cloud (.xyz, .pts, .ply): reads one or several scans with the native
+readers (through lfprobe's parse cache) off the main thread and makes scan cloud objects."""
+
+import os
+
+import bpy
+import numpy as np
+from bpy.props import BoolProperty, CollectionProperty, FloatProperty, IntProperty, StringProperty
+from bpy_extras.io_utils import ImportHelper
+
+from ..core import native
+from ..core.sources import default_cache_dir
+from . import scan_object
+from .job_modal import NativeJobOperator
+
+SCAN_EXTENSIONS = (".xyz", ".pts", ".ply", ".txt", ".asc")
+# Clouds further than this from the scene's frame keep their own world offset: float32
+# positions (Blender's) hold about 1 mm at 10 km.
+SHARED_FRAME_LIMIT = 10_000.0
+
+
+def automatic_point_radius(bounds_min, bounds_max, displayed: int) -> float:
+    """Half the mean point spacing, taking the points to lie on the box's faces (a room)."""
+    size = np.maximum(np.asarray(bounds_max, float) - np.asarray(bounds_min, float), 1e-6)
+    area = 2.0 * (size[0] * size[1] + size[1] * size[2] + size[2] * size[0])
+    return float(0.5 * np.sqrt(area / max(displayed, 1)))
+
+
+def _world_scanner(scanner, offset):
+    if scanner is None:
+        return None
+    return [float(s) + float(o) for s, o in zip(scanner, offset)]
+
+
+class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator):
+    """Import laser scan point clouds (.xyz, .pts, .ply) as scan cloud objects"""
+
+    bl_idname = "import_scene.lfprobe_scan"
+    bl_label = "Import Scan Cloud"
+    bl_options = {"REGISTER", "UNDO"}
+    job_label = "Scan import"
+
+    filename_ext = ".xyz"
+    filter_glob: StringProperty(default="*.xyz;*.pts;*.ply;*.txt;*.asc", options={"HIDDEN"})
+    files: CollectionProperty(type=bpy.types.OperatorFileListElement, options={"HIDDEN", "SKIP_SAVE"})
+    directory: StringProperty(subtype="DIR_PATH", options={"HIDDEN", "SKIP_SAVE"})
+
+    display_limit: IntProperty(
+        name="Display Limit",
+        description="Most points shown in the viewport; the full cloud stays available to the baker",
+        min=1000,
+        default=2_000_000,
+    )
+    separate_objects: BoolProperty(
+        name="One Object per File", description="Make an object per scan file instead of one merged cloud"
+    )
+    point_radius: FloatProperty(
+        name="Point Radius",
+        description="Radius of the displayed points (0 = half the mean spacing of the displayed points)",
+        min=0.0,
+        default=0.0,
+        unit="LENGTH",
+    )
+    columns: StringProperty(
+        name="Columns",
+        description='Column names of text scans, e.g. "x y z i r g b" (empty: from the header or the count)',
+        default="",
+    )
+
+    def _paths(self) -> list:
+        names = [f.name for f in self.files if f.name]
+        if names:
+            return [os.path.join(self.directory, name) for name in names]
+        return [self.filepath] if self.filepath else []
+
+    def execute(self, context):
+        return self.run_job(context)
+
+    def start_job(self, context):
+        paths = [bpy.path.abspath(p) for p in self._paths()]
+        if not paths:
+            self.report({"ERROR"}, "Scan import: no file given")
+            return None
+        for path in paths:
+            if not os.path.isfile(path):
+                self.report({"ERROR"}, f"Scan import: {path}: no such file")
+                return None
+            if not path.lower().endswith(SCAN_EXTENSIONS):
+                self.report(
+                    {"ERROR"},
+                    f"Scan import: {path}: not a scan file (expected {', '.join(SCAN_EXTENSIONS)})",
+                )
+                return None
+        try:
+            _native = native.load()
+        except native.NativeModuleError as error:
+            self.report({"ERROR"}, str(error))
+            return None
+        self._import_paths = paths
+        return _native.start_load_scans(paths, columns=self.columns, cache_dir=default_cache_dir())
+
+    def finish_job(self, context, cloud):
+        paths = self._import_paths
+        collection = context.collection or context.scene.collection
+        offset = np.array(cloud.world_offset, dtype=float)
+        positions = cloud.positions
+        # Share the scene's local frame when close enough, so scans line up in Blender.
+        frame = scan_object.frame_offset(context.scene)
+        if frame is not None and np.any(np.asarray(frame) != offset):
+            shift = offset - np.asarray(frame)
+            if np.abs(shift).max() + np.abs(positions).max() < SHARED_FRAME_LIMIT:
+                positions = (positions.astype(np.float64) + shift).astype(np.float32)
+                offset = np.asarray(frame, dtype=float)
+            else:
+                self.report(
+                    {"WARNING"},
+                    f"{os.path.basename(paths[0])}: far from the other scans' frame; "
+                    f"it keeps its own world offset {tuple(offset)}",
+                )
+        colors = cloud.colors
+        scans = cloud.scans
+        scan_index = cloud.scan_index if self.separate_objects and len(paths) > 1 else None
+        groups = (
+            [(paths, np.arange(len(positions)), [s["scanner"] for s in scans])]
+            if scan_index is None
+            else [([p], np.flatnonzero(scan_index == i), [scans[i]["scanner"]]) for i, p in enumerate(paths)]
+        )
+        created = []
+        for group_paths, members, scanners in groups:
+            created.append(
+                self._make_object(collection, group_paths, members, positions, colors, scanners, cloud, offset)
+            )
+        for obj in context.view_layer.objects:
+            obj.select_set(False)
+        for obj in created:
+            obj.select_set(True)
+        context.view_layer.objects.active = created[-1]
+        total = sum(o.lfprobe_scan.point_count for o in created)
+        shown = sum(o.lfprobe_scan.display_count for o in created)
+        self.report({"INFO"}, f"Imported {total:,} points from {len(paths)} file(s); {shown:,} displayed")
+        return {"FINISHED"}
+
+    def _make_object(self, collection, paths, members, positions, colors, scanners, cloud, offset):
+        own = positions[members]
+        bounds = (tuple(map(float, own.min(axis=0))), tuple(map(float, own.max(axis=0))))
+        subset = scan_object.display_indices(len(members), self.display_limit)
+        if subset is not None:
+            members = members[subset]
+        shown = positions[members]
+        radius = self.point_radius or automatic_point_radius(*bounds, len(shown))
+        # Scanners are in the cloud's own frame; the object's frame may be the scene's.
+        cloud_offset = cloud.world_offset
+        name = os.path.splitext(os.path.basename(paths[0]))[0] + (" +%d" % (len(paths) - 1) if len(paths) > 1 else "")
+        return scan_object.build_scan_object(
+            name,
+            shown,
+            None if colors is None else colors[members],
+            point_count=len(own),
+            source_paths=paths,
+            world_offset=offset,
+            scanners=[_world_scanner(s, cloud_offset) for s in scanners],
+            bounds=bounds,
+            point_radius=radius,
+            collection=collection,
+        )
+
+
+def _menu_import(self, _context):
+    self.layout.operator(LFPROBE_OT_import_scan.bl_idname, text="Scan Cloud (.xyz, .pts, .ply)")
+
+
+def register():
+    bpy.utils.register_class(LFPROBE_OT_import_scan)
+    bpy.types.TOPBAR_MT_file_import.append(_menu_import)
+
+
+def unregister():
+    bpy.types.TOPBAR_MT_file_import.remove(_menu_import)
+    bpy.utils.unregister_class(LFPROBE_OT_import_scan)

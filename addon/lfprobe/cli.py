@@ -1,0 +1,248 @@
+"""Headless batch entry of the Blender add-on: bake, render and compare a saved scene.
+
+    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- bake [--grid NAME]
+    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- render [--camera NAME] --out IMG.exr
+    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- compare --reference OBJ... --out DIR
+
+The add-on is used as it is enabled in Blender (legacy add-on or extension), or else imported
+from the folder this file lies in (whose parent is put on sys.path) and enabled for this run
+only. Exit status: 0 success, 2 bad input (the message says what and where), 1 other
+failures, 130 cancelled. Run inside Blender only; the bpy-free command line is ./lfprobe.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import json
+import os
+import sys
+
+EXIT_OK, EXIT_FAILURE, EXIT_BAD_INPUT, EXIT_CANCELLED = 0, 1, 2, 130
+
+
+class BatchError(Exception):
+    """A failure with its exit status; the message is what the user reads."""
+
+    def __init__(self, message: str, status: int = EXIT_BAD_INPUT):
+        super().__init__(message)
+        self.status = status
+
+
+def _add_on_package():
+    """The add-on's package, enabled: an already enabled copy, else the one holding this file."""
+    import addon_utils
+    import bpy
+
+    for name in bpy.context.preferences.addons.keys():
+        if name == "lfprobe" or name.endswith(".lfprobe"):
+            return importlib.import_module(name)
+    package_dir = os.path.dirname(os.path.abspath(__file__))
+    parent = os.path.dirname(package_dir)
+    if parent not in sys.path:
+        sys.path.insert(0, parent)
+    package_name = os.path.basename(package_dir)
+    errors = []
+    module = addon_utils.enable(package_name, default_set=False, handle_error=errors.append)
+    if module is None:
+        detail = f": {errors[0]}" if errors else ""
+        raise BatchError(f"cannot enable the lfprobe add-on from {package_dir}{detail}", EXIT_FAILURE)
+    return module
+
+
+def _blender_module(package, name: str):
+    return importlib.import_module(f"{package.__name__}.blender.{name}")
+
+
+def _scene(name: str):
+    import bpy
+
+    if not name:
+        return bpy.context.scene
+    scene = bpy.data.scenes.get(name)
+    if scene is None:
+        raise BatchError(f"no scene named '{name}' in {bpy.data.filepath or 'the unsaved file'}")
+    return scene
+
+
+def _camera(scene, name: str):
+    if not name:
+        if scene.camera is None:
+            raise BatchError(f"scene '{scene.name}' has no active camera: pass --camera NAME")
+        return scene.camera
+    obj = scene.objects.get(name)
+    if obj is None:
+        raise BatchError(f"no object named '{name}' in scene '{scene.name}'")
+    if obj.type != "CAMERA":
+        raise BatchError(f"object '{name}' is a {obj.type.lower()}, not a camera")
+    return obj
+
+
+def _depsgraph(scene):
+    """The evaluated depsgraph of the scene (animated or constrained cameras and meshes)."""
+    import bpy
+
+    if scene == bpy.context.scene:
+        return bpy.context.evaluated_depsgraph_get()
+    depsgraph = scene.view_layers[0].depsgraph
+    depsgraph.update()
+    return depsgraph
+
+
+def _cmd_bake(package, args) -> int:
+    import bpy
+
+    grid_module = _blender_module(package, "grid")
+    scene = _scene(args.scene)
+    if args.grid:
+        grid_obj = scene.objects.get(args.grid)
+        if grid_obj is None or not grid_module.is_grid(grid_obj):
+            raise BatchError(f"no probe grid named '{args.grid}' in scene '{scene.name}'")
+        grids = [grid_obj]
+    else:
+        grids = sorted((o for o in scene.objects if grid_module.is_grid(o)), key=lambda o: o.name)
+        if not grids:
+            raise BatchError(f"scene '{scene.name}' has no probe grid to bake")
+    for grid_obj in grids:
+        try:
+            result = bpy.ops.object.lfprobe_bake(grid=grid_obj.name)
+        except RuntimeError as error:  # the operator's ERROR report
+            raise BatchError(str(error).strip(), EXIT_BAD_INPUT) from error
+        if result != {"FINISHED"}:
+            raise BatchError(f"baking grid '{grid_obj.name}' was cancelled", EXIT_CANCELLED)
+        print(f"lfprobe: baked grid '{grid_obj.name}' into {grid_module.probe_dir_abspath(grid_obj)}")
+    if not args.no_save:
+        if not bpy.data.filepath:
+            raise BatchError("the scene is not saved to a .blend: pass --no-save or open a saved .blend")
+        bpy.ops.wm.save_mainfile()
+        print(f"lfprobe: saved {bpy.data.filepath} (grids marked as baked)")
+    return EXIT_OK
+
+
+def _cmd_render(package, args) -> int:
+    camera_export = _blender_module(package, "camera_export")
+    probe_view = _blender_module(package, "probe_view")
+    scene = _scene(args.scene)
+    camera_obj = _camera(scene, args.camera)
+    grid_obj = probe_view.grid_to_trace(scene, args.grid)
+    folder = probe_view.probe_folder(grid_obj)
+    offset = probe_view.frame_offset(scene, grid_obj)
+    camera = camera_export.camera_dict(scene, camera_obj, offset, depsgraph=_depsgraph(scene))
+    trace = probe_view.trace_settings(scene)
+    for option in ("mode", "thickness", "threads"):
+        value = getattr(args, option)
+        if value is not None:
+            trace[option] = value
+    out = os.path.abspath(args.out)
+    if not os.path.isdir(os.path.dirname(out)):
+        raise BatchError(f"--out {args.out}: the folder {os.path.dirname(out)} does not exist")
+    if args.camera_json:
+        importlib.import_module(f"{package.__name__}.core.camera_json").write_camera(args.camera_json, camera)
+    field = probe_view.load_field(folder)
+    _image, stats = field.render(json.dumps(camera), output=out, **trace)
+    rays = max(int(stats["rays"]), 1)
+    print(f"lfprobe: rendered {out} from camera '{camera_obj.name}' through grid '{grid_obj.name}': "
+          f"{rays:,} rays in {stats['seconds'] * 1000:.1f} ms ({stats['rays_per_second'] / 1e6:.2f} M rays/s), "
+          f"HIT {100 * stats['hits'] / rays:.2f}%, UNKNOWN {100 * stats['unknown'] / rays:.2f}%")
+    return EXIT_OK
+
+
+def _cmd_compare(package, args) -> int:
+    compare = _blender_module(package, "compare")
+    scene = _scene(args.scene)
+    references = []
+    for name in args.reference:
+        obj = scene.objects.get(name)
+        if obj is None:
+            raise BatchError(f"--reference: no object named '{name}' in scene '{scene.name}'")
+        if obj.type != "MESH":
+            raise BatchError(f"--reference: object '{name}' is a {obj.type.lower()}, not a mesh")
+        references.append(obj)
+    camera_obj = _camera(scene, args.camera)
+    result = compare.run_compare(scene, _depsgraph(scene), references, os.path.abspath(args.out),
+                                 camera_obj=camera_obj, grid_name=args.grid, spp=args.spp, ppd=args.ppd)
+    print(f"lfprobe: compare {compare.summary_line(result)}")
+    print(f"lfprobe: ground truth {result['ref_render_seconds'] * 1000:.1f} ms, probes "
+          f"{result['test_render_seconds'] * 1000:.1f} ms; report in {os.path.dirname(result['reference'])}")
+    return EXIT_OK
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="blender -b scene.blend --python-exit-code 1 -P cli.py --",
+        description="Bake, render and compare the light field probes of a saved Blender scene.")
+    parser.add_argument("--scene", default="", help="scene to use (default: the file's active scene)")
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    bake = sub.add_parser("bake", help="bake the scene's probe grids and save the .blend")
+    bake.add_argument("--grid", default="", metavar="NAME", help="bake only this grid (default: every grid)")
+    bake.add_argument("--no-save", action="store_true", help="do not save the .blend afterwards")
+    bake.set_defaults(run=_cmd_bake)
+
+    render = sub.add_parser("render", help="trace a camera's view through the baked probes into an EXR")
+    render.add_argument("--camera", default="", metavar="NAME", help="camera object (default: the scene camera)")
+    render.add_argument("--out", required=True, metavar="IMG.exr",
+                        help="image to write (the EXR of ./lfprobe render: RGBA, Z, N, status, probe, steps)")
+    render.add_argument("--grid", default="", metavar="NAME",
+                        help="probe grid (default: the render settings' grid, else the first baked one)")
+    render.add_argument("--mode", choices=["auto", "nearest", "grid"], default=None,
+                        help="probe order (default: the scene's render setting)")
+    render.add_argument("--thickness", type=float, default=None, help="surface thickness in metres")
+    render.add_argument("--threads", type=int, default=None, help="cores (0: all); the image is the same")
+    render.add_argument("--camera-json", metavar="CAM.json", help="also write the camera file used")
+    render.set_defaults(run=_cmd_render)
+
+    compare = sub.add_parser("compare", help="ground truth of reference meshes vs the probes, with metrics")
+    compare.add_argument("--reference", nargs="+", required=True, metavar="OBJ", help="reference mesh objects")
+    compare.add_argument("--out", required=True, metavar="DIR", help="report folder (created)")
+    compare.add_argument("--camera", default="", metavar="NAME", help="camera object (default: the scene camera)")
+    compare.add_argument("--grid", default="", metavar="NAME", help="probe grid (default as for render)")
+    compare.add_argument("--spp", type=int, default=1, help="ground truth samples per pixel (1 or a square)")
+    compare.add_argument("--ppd", type=float, default=67.0, help="FLIP pixels per degree")
+    compare.set_defaults(run=_cmd_compare)
+    return parser
+
+
+def _arguments(argv) -> list:
+    return argv[argv.index("--") + 1:] if "--" in argv else []
+
+
+def main(argv=None) -> int:
+    args = build_parser().parse_args(_arguments(sys.argv if argv is None else argv))
+    try:
+        package = _add_on_package()
+        user_errors = tuple(
+            getattr(_blender_module(package, module), name)
+            for module, name in (("probe_view", "TraceSetupError"), ("camera_export", "CameraExportError"),
+                                 ("compare", "CompareError"), ("mesh_export", "MeshExportError"))
+        )
+        native = importlib.import_module(f"{package.__name__}.core.native").load()
+    except BatchError as error:
+        print(f"lfprobe: error: {error}", file=sys.stderr)
+        return error.status
+    except ImportError as error:
+        print(f"lfprobe: error: {error}", file=sys.stderr)
+        return EXIT_FAILURE
+    try:
+        return args.run(package, args)
+    except BatchError as error:
+        print(f"lfprobe: error: {error}", file=sys.stderr)
+        return error.status
+    except user_errors + (native.InputError, FileNotFoundError) as error:
+        print(f"lfprobe: error: {error}", file=sys.stderr)
+        return EXIT_BAD_INPUT
+    except native.Cancelled:
+        print("lfprobe: cancelled", file=sys.stderr)
+        return EXIT_CANCELLED
+    except (native.NativeIOError, OSError) as error:
+        print(f"lfprobe: error: {error}", file=sys.stderr)
+        return EXIT_FAILURE
+
+
+if __name__ == "__main__":
+    sys.stdout.flush()
+    status = main()
+    sys.stdout.flush()
+    sys.stderr.flush()
+    if status:
+        sys.exit(status)

@@ -1,0 +1,81 @@
+"""Reads the channels of an uncompressed scanline OpenEXR file (what Blender writes with codec
+NONE: single-part in 3.4, multi-part in 5.0) into numpy arrays, so that tests can look at
+every render pass of a multilayer EXR."""
+
+from __future__ import annotations
+
+import struct
+
+import numpy as np
+
+_PIXEL_TYPES = {0: np.uint32, 1: np.float16, 2: np.float32}
+_MULTIPART = 0x1000
+_TILED = 0x200
+
+
+def _read_header(data: bytes, pos: int):
+    """One header's attributes {name: (type, bytes)} and the position after its end byte."""
+    attrs = {}
+    while data[pos] != 0:
+        end = data.index(b"\0", pos)
+        name = data[pos:end].decode()
+        end_type = data.index(b"\0", end + 1)
+        type_name = data[end + 1:end_type].decode()
+        size = struct.unpack_from("<i", data, end_type + 1)[0]
+        attrs[name] = (type_name, data[end_type + 5:end_type + 5 + size])
+        pos = end_type + 5 + size
+    return attrs, pos + 1
+
+
+def _channels(raw: bytes):
+    out, pos = [], 0
+    while raw[pos] != 0:
+        end = raw.index(b"\0", pos)
+        name = raw[pos:end].decode()
+        pixel_type, _linear, x_sampling, y_sampling = struct.unpack_from("<iB3xii", raw, end + 1)
+        if (x_sampling, y_sampling) != (1, 1):
+            raise ValueError(f"channel {name}: subsampled channels are not read here")
+        out.append((name, _PIXEL_TYPES[pixel_type]))
+        pos = end + 1 + 16
+    return out
+
+
+def read_exr_channels(path: str) -> dict:
+    """{channel name: (h, w) array, top row first} of an uncompressed scanline EXR."""
+    with open(path, "rb") as stream:
+        data = stream.read()
+    if data[:4] != b"\x76\x2f\x31\x01":
+        raise ValueError(f"{path}: not an OpenEXR file")
+    flags = struct.unpack_from("<I", data, 4)[0]
+    if flags & _TILED:
+        raise ValueError(f"{path}: tiled EXR files are not read here")
+    multipart = bool(flags & _MULTIPART)
+    headers, pos = [], 8
+    while True:
+        attrs, pos = _read_header(data, pos)
+        headers.append(attrs)
+        if not multipart or data[pos] == 0:
+            pos += 1 if multipart else 0
+            break
+    parts = []
+    for attrs in headers:
+        if attrs["compression"][1][0] != 0:
+            raise ValueError(f"{path}: only uncompressed EXR (codec NONE) is read here")
+        xmin, ymin, xmax, ymax = struct.unpack("<iiii", attrs["dataWindow"][1])
+        parts.append((xmax - xmin + 1, ymax - ymin + 1, ymin, _channels(attrs["channels"][1])))
+    arrays = {}
+    for width, height, ymin, channels in parts:
+        for name, dtype in channels:
+            arrays[name] = np.empty((height, width), dtype=dtype)
+    for width, height, ymin, channels in parts:
+        offsets = np.frombuffer(data, dtype="<u8", count=height, offset=pos)
+        pos += 8 * height
+        for offset in offsets:
+            cursor = int(offset) + (4 if multipart else 0)  # multi-part chunks start with the part number
+            y = struct.unpack_from("<i", data, cursor)[0] - ymin
+            cursor += 8
+            for name, dtype in channels:
+                arrays[name][y] = np.frombuffer(data, dtype=np.dtype(dtype).newbyteorder("<"), count=width,
+                                                offset=cursor)
+                cursor += width * np.dtype(dtype).itemsize
+    return arrays
