@@ -138,7 +138,7 @@ def _cmd_render(package, args) -> int:
         raise BatchError(f"--out {args.out}: the folder {os.path.dirname(out)} does not exist")
     if args.camera_json:
         importlib.import_module(f"{package.__name__}.core.camera_json").write_camera(args.camera_json, camera)
-    field = probe_view.load_field(folder)
+    field = probe_view.load_field(folder, probe_view.coarse_resolution(grid_obj))
     _image, stats = field.render(json.dumps(camera), output=out, **trace)
     rays = max(int(stats["rays"]), 1)
     print(f"lfprobe: rendered {out} from camera '{camera_obj.name}' through grid '{grid_obj.name}': "

@@ -97,11 +97,14 @@ void bind_render(py::module_& m) {
         m, "ProbeField", "A loaded probe set: maps and coarse levels, ready to trace.")
         .def_static(
             "load",
-            [](const std::string& folder) {
+            [](const std::string& folder, int coarse_resolution) {
                 py::gil_scoped_release release;
-                return std::make_shared<ProbeField>(ProbeField::load(folder));
+                return std::make_shared<ProbeField>(
+                    ProbeField::load(folder, nullptr, coarse_resolution));
             },
-            py::arg("folder"))
+            py::arg("folder"), py::arg("coarse_resolution") = 0,
+            "Load a probe set; coarse_resolution is the size of the coarsest min-distance level "
+            "kept (0: every level down to 1x1).")
         .def_property_readonly("probe_count", &ProbeField::probe_count)
         .def_property_readonly("is_grid", &ProbeField::is_grid)
         .def_property_readonly("memory_bytes", &ProbeField::memory_bytes)

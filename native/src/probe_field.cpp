@@ -149,7 +149,13 @@ const char* field_mode_name(FieldMode mode) {
     return "auto";
 }
 
-ProbeField ProbeField::load(const std::string& folder, Progress* progress) {
+ProbeField ProbeField::load(const std::string& folder, Progress* progress, int coarse_resolution) {
+    if (coarse_resolution < 0) {
+        throw InputError(
+            "probe field: coarse_resolution must be 0 (every level) or positive, got " +
+            std::to_string(coarse_resolution));
+    }
+    const int coarsest = std::max(coarse_resolution, 1);
     ProbeField field;
     field.manifest_ = read_manifest(folder);
     const std::size_t count = field.manifest_.probes.size();
@@ -168,7 +174,7 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress) {
         }
         field.probes_[i] = read_probe(folder, field.manifest_, i);
         field.levels_[i] =
-            MinDistancePyramid(field.probes_[i].distance, field.probes_[i].resolution);
+            MinDistancePyramid(field.probes_[i].distance, field.probes_[i].resolution, coarsest);
         if (progress != nullptr) {
             progress->advance(1);
         }

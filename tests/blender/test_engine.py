@@ -63,6 +63,22 @@ def test_f12_matches_the_cli_render_of_the_same_camera():
     assert np.array_equal(passes["LFP Steps.X"], cli["steps"].astype(np.float32))
 
 
+def test_grid_coarse_resolution_reaches_the_trace():
+    """The grid's Coarse Resolution keeps fewer min-distance levels (less memory); the F12
+    image keeps its colours and depths, the steps pass shows the different walk."""
+    grid, _camera = probe_scene.traced_scene()
+    work = helpers.tmp_dir()
+    full = _f12(os.path.join(work, "all_levels.exr"))
+    probe_view = helpers.addon("blender.probe_view")
+    folder = probe_view.probe_folder(grid)
+    grid.lfprobe_grid.coarse_resolution = 16
+    shallow = _f12(os.path.join(work, "from_16.exr"))
+    assert probe_view.load_field(folder, 16).memory_bytes < probe_view.load_field(folder, 0).memory_bytes
+    assert np.array_equal(shallow["Combined.R"], full["Combined.R"])
+    assert np.array_equal(shallow["Depth.Z"], full["Depth.Z"])
+    assert not np.array_equal(shallow["LFP Steps.X"], full["LFP Steps.X"])
+
+
 def test_depth_pass_is_written_when_the_view_layer_has_it_off():
     probe_scene.traced_scene()
     bpy.context.view_layer.use_pass_z = False

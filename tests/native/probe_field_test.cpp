@@ -271,6 +271,15 @@ TEST(Grid, ProbeSetsLoadFromDiskAndModesAreChecked) {
     const FieldTraceResult r = field.trace(ray);
     EXPECT_EQ(r.status, TraceStatus::Hit);
     EXPECT_NEAR(r.t, truth(room, ray), 0.1);
+    // A coarser start keeps fewer levels (less memory) and gives the same answer; the step count
+    // may go either way (fewer levels to climb, less skipped per step).
+    const ProbeField shallow = ProbeField::load(folder.string(), nullptr, 12);
+    EXPECT_EQ(shallow.levels(0).levels().back().resolution, 12);
+    EXPECT_LT(shallow.memory_bytes(), field.memory_bytes());
+    const FieldTraceResult rs = shallow.trace(ray);
+    EXPECT_EQ(rs.status, r.status);
+    EXPECT_EQ(rs.t, r.t);
+    EXPECT_THROW((void)ProbeField::load(folder.string(), nullptr, -1), InputError);
     std::filesystem::remove_all(folder);
 
     const ProbeField loose(ProbePlacement::from_positions({glm::dvec3(0.0, 0.0, 1.2)}),

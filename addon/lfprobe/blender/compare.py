@@ -86,6 +86,7 @@ class ComparePlan:
             raise CompareError(f"samples per pixel must be 1 or a square (4, 9, 16, ...), not {spp}")
         self.grid = probe_view.grid_to_trace(scene, grid_name)
         self.folder = probe_view.probe_folder(self.grid)
+        self.coarse_resolution = probe_view.coarse_resolution(self.grid)
         self.offset = probe_view.frame_offset(scene, self.grid)
         self.camera = camera_export.camera_dict(scene, camera_obj, self.offset, depsgraph=depsgraph)
         self.trace = probe_view.trace_settings(scene)
@@ -114,7 +115,7 @@ class ComparePlan:
     def finish(self, gt_stats: dict) -> dict:
         """Traces the probes, measures against the ground truth, writes the report."""
         _native = native.load()
-        field = probe_view.load_field(self.folder)
+        field = probe_view.load_field(self.folder, self.coarse_resolution)
         _image, probe_stats = field.render(json.dumps(self.camera), output=self.paths["probes"], **self.trace)
         reference = _native.read_image(self.paths["ground_truth"])
         test = _native.read_image(self.paths["probes"])

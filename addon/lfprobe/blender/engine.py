@@ -148,7 +148,7 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
         offset = probe_view.frame_offset(scene, grid_obj)
         camera = camera_export.camera_dict(scene, scene.camera, offset, depsgraph=depsgraph)
         self.update_stats("", f"Light Field Probes: loading {grid_obj.name}")
-        field = probe_view.load_field(folder)
+        field = probe_view.load_field(folder, probe_view.coarse_resolution(grid_obj))
         if self.test_break():
             return None
         width, height = camera["resolution"]
@@ -223,7 +223,7 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
         folder = probe_view.probe_folder(grid_obj)
         offset = probe_view.frame_offset(scene, grid_obj)
         camera = camera_export.viewport_camera_dict(region_data, width, height, offset)
-        field = probe_view.load_field(folder)
+        field = probe_view.load_field(folder, probe_view.coarse_resolution(grid_obj))
         trace = probe_view.trace_settings(scene)
         key = (json.dumps(camera, sort_keys=True), id(field), tuple(sorted(trace.items())))
         self._view.request(field, camera, width, height, trace, key)

@@ -83,14 +83,19 @@ _fields: "OrderedDict[tuple, object]" = OrderedDict()
 _fields_lock = threading.Lock()
 
 
-def load_field(folder: str):
-    """The ProbeField of `folder`, loaded once per version of its manifest."""
+def coarse_resolution(grid_obj) -> int:
+    """The grid's coarsest min-distance level kept when its probes are loaded (0: all)."""
+    return int(grid_obj.lfprobe_grid.coarse_resolution) if grid_obj is not None else 0
+
+
+def load_field(folder: str, coarse_resolution: int = 0):
+    """The ProbeField of `folder`, loaded once per version of its manifest and coarse level."""
     manifest = os.path.join(folder, MANIFEST)
     try:
         stat = os.stat(manifest)
     except OSError as error:
         raise TraceSetupError(f"{manifest}: cannot read the probe set manifest ({error.strerror})") from error
-    key = (os.path.abspath(folder), stat.st_mtime_ns, stat.st_size)
+    key = (os.path.abspath(folder), stat.st_mtime_ns, stat.st_size, int(coarse_resolution))
     with _fields_lock:
         field = _fields.get(key)
         if field is not None:
@@ -98,7 +103,7 @@ def load_field(folder: str):
             return field
         _native = native.load()
         try:
-            field = _native.ProbeField.load(folder)
+            field = _native.ProbeField.load(folder, coarse_resolution=int(coarse_resolution))
         except (_native.InputError, _native.NativeIOError) as error:
             raise TraceSetupError(f"cannot load the probe set {folder}: {error}") from error
         stale = [k for k in _fields if k[0] == key[0]]

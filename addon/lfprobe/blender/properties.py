@@ -96,7 +96,7 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
     )
     coarse_resolution: IntProperty(
         name="Coarse Resolution",
-        description="Size of the coarsest min-distance level the trace starts from (0 = automatic)",
+        description="Size of the coarsest min-distance level kept when the probes are loaded for tracing (0 = every level down to 1x1; larger keeps less memory)",
         min=0,
         soft_max=512,
         default=0,

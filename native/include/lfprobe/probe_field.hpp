@@ -59,7 +59,11 @@ class ProbeField {
 public:
     // Loads the probe set in `folder`: the manifest, every probe and its coarse levels, in
     // parallel. Progress counts probes; cancellation is honoured between probes.
-    [[nodiscard]] static ProbeField load(const std::string& folder, Progress* progress = nullptr);
+    // `coarse_resolution` is the size of the coarsest min-distance level kept (the level a
+    // trace starts its skipping from): 0 or 1 keeps every level down to 1×1; a larger value
+    // drops the levels below it (less memory, more steps per ray).
+    [[nodiscard]] static ProbeField load(const std::string& folder, Progress* progress = nullptr,
+                                         int coarse_resolution = 0);
 
     // A field over probes already in memory, in the placement's index order (probe i of a grid
     // is x + counts[0] * (y + counts[1] * z)). The probes' own positions are where they are
