@@ -140,6 +140,35 @@ void bind_render(py::module_& m) {
             "Probe-trace rays per second measured as embree_throughput measures Embree's: the "
             "camera's pixel-centre rays made beforehand, trace only, fastest of `repeats`.")
         .def(
+            "start_render",
+            [](std::shared_ptr<ProbeField> field, const std::string& camera,
+               const std::string& mode, int threads, double thickness, bool use_coarse_levels,
+               int tile_size) {
+                const Camera cam = camera_from(camera);
+                const RenderSettings settings =
+                    render_settings(mode, thickness, use_coarse_levels, tile_size);
+                using Result = std::pair<RenderedImage, RenderStats>;
+                return std::make_unique<Job>(
+                    std::function<Result(Progress&)>([=](Progress& progress) {
+                        return on_threads(threads, [&] {
+                            RenderStats stats;
+                            RenderedImage image =
+                                render_probe_view(*field, cam, settings, &progress, &stats);
+                            return Result{std::move(image), stats};
+                        });
+                    }),
+                    std::function<py::object(Result &&)>([](Result&& r) -> py::object {
+                        return py::make_tuple(image_dict(std::move(r.first), ""),
+                                              render_stats_dict(r.second));
+                    }));
+            },
+            py::arg("camera"), py::arg("mode") = "auto", py::arg("threads") = 0,
+            py::arg("thickness") = TraceSettings{}.thickness, py::arg("use_coarse_levels") = true,
+            py::arg("tile_size") = RenderSettings{}.tile_size,
+            "Start tracing a view in the background (the Blender engine's F12): a Job with "
+            "progress in pixels, cancel(), and result() = (image dict, stats dict) as render() "
+            "returns.")
+        .def(
             "render",
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
                const std::string& output, const std::string& mode, int threads, double thickness,

@@ -49,6 +49,25 @@ def test_render_is_the_same_on_one_and_two_threads(native, room):
         assert np.array_equal(images[0][key], images[1][key], equal_nan=True), key
 
 
+def test_background_render_equals_render_and_cancels(native, room):
+    """ProbeField.start_render (the engine's F12 path) gives render()'s image; cancel stops it."""
+    field = native.ProbeField.load(str(room["probes"]))
+    camera = room["camera"].read_text()
+    image, stats = field.render(camera, threads=2)
+    job = field.start_render(camera, threads=2)
+    job_image, job_stats = job.result()
+    assert job.fraction == 1.0
+    for key in ("rgba", "depth", "status", "probe", "steps"):
+        assert np.array_equal(job_image[key], image[key], equal_nan=True), key
+    assert job_stats["hits"] == stats["hits"]
+    big = json.loads(camera)
+    big["resolution"] = [1600, 1200]
+    job = field.start_render(json.dumps(big), threads=1)
+    job.cancel()
+    with pytest.raises(native.Cancelled):
+        job.result()
+
+
 def test_splat_baseline_renders_the_same_camera(native, room):
     out = room["folder"] / "splat.exr"
     result = run_cli("splat", "--scan", room["scan"], "--scanner", 0, 0, 1.25, "--camera",

@@ -153,7 +153,15 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
             return None
         width, height = camera["resolution"]
         self.update_stats("", f"Light Field Probes: tracing {width}×{height} through {field.probe_count} probes")
-        image, stats = field.render(json.dumps(camera), **probe_view.trace_settings(scene))
+        # In the background, so that Esc (test_break) stops the trace mid-frame.
+        job = field.start_render(json.dumps(camera), **probe_view.trace_settings(scene))
+        while not job.wait(0.1):
+            if self.test_break():
+                job.cancel()
+                job.wait()
+                return None
+            self.update_progress(job.fraction)
+        image, stats = job.result()
         rays = max(int(stats["rays"]), 1)
         self.update_stats("", f"Light Field Probes: {stats['seconds'] * 1000:.0f} ms, "
                               f"{stats['rays_per_second'] / 1e6:.2f} M rays/s, HIT {100 * stats['hits'] / rays:.1f}%")
