@@ -436,6 +436,7 @@ PYBIND11_MODULE(_native, m) {
 
     lfprobe::python::bind_render(m);
     lfprobe::python::bind_mesh(m);
+    lfprobe::python::bind_plan(m);
 
     m.def(
         "read_probe", [](const std::string& path) { return probe_dict(read_probe_exr(path)); },

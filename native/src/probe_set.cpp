@@ -224,7 +224,8 @@ BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest
         const std::string path = (fs::path(folder) / file).string();
         write_probe_exr(path, map);
         summary.write_seconds += seconds_since(start);
-        ProbeRecord record{file, positions[i], map.resolution, coverage_of(map),
+        // The map's own position: a planned probe may have been moved off its grid point.
+        ProbeRecord record{file, map.position, map.resolution, coverage_of(map),
                            map.memory_bytes()};
         summary.mean_coverage.surface += record.coverage.surface;
         summary.mean_coverage.inferred += record.coverage.inferred;

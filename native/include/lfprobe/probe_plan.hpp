@@ -1,0 +1,69 @@
+// Planning a probe set from the data before the full bake (issue "model only what a scene
+// needs"): per probe, the resolution its points support (probe_resolution.hpp), and what it is
+// good for (probe_classification.hpp) from a quick low-resolution bake; probes inside geometry
+// or against a wall are moved within a bounded distance, probes that stay useless are dropped:
+// kept as a tiny placeholder map, so that a grid stays a grid and its walk stays valid, while
+// their memory all but vanishes (a placeholder answers UNKNOWN, and the walk asks the next
+// probe).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <nlohmann/json.hpp>
+
+#include "lfprobe/local_geometry.hpp"
+#include "lfprobe/point_cloud.hpp"
+#include "lfprobe/probe_bake.hpp"
+#include "lfprobe/probe_classification.hpp"
+#include "lfprobe/probe_placement.hpp"
+#include "lfprobe/probe_resolution.hpp"
+#include "lfprobe/probe_set.hpp"
+#include "lfprobe/progress.hpp"
+
+namespace lfprobe {
+
+struct PlanSettings {
+    bool auto_resolution = true;
+    int fixed_resolution = 512; // when not auto_resolution
+    ResolutionSettings resolution;
+    bool classify = true;
+    ClassificationSettings classes; // cell_reach 0 = taken from the grid spacing
+    int classify_resolution = 64;   // of the quick bakes that classify
+    double max_move = 0.0;          // metres; 0 = 0.45 × the smallest grid spacing (0.25 m loose)
+    bool drop = true;
+    int placeholder_resolution = 8; // what a dropped probe keeps
+    BakeSettings bake;              // splat and hole-fill settings of every bake
+};
+
+struct PlannedProbe {
+    glm::dvec3 original{0.0}; // where the placement put it (local frame)
+    glm::dvec3 position{0.0}; // where it will be baked
+    int resolution = 0;
+    ProbeClass found = ProbeClass::Useful; // before any move
+    ProbeClass kind = ProbeClass::Useful;  // after the moves
+    bool moved = false;
+    bool dropped = false;
+    ResolutionChoice choice;
+    ProbeClassification classification; // at `position`
+};
+
+struct ProbePlan {
+    std::vector<PlannedProbe> probes;
+    [[nodiscard]] nlohmann::json to_json(const glm::dvec3& world_offset) const;
+};
+
+[[nodiscard]] ProbePlan plan_probes(const PointCloud& cloud, const LocalGeometry& geometry,
+                                    const ProbePlacement& placement, const PlanSettings& settings,
+                                    Progress* progress = nullptr);
+
+// Bakes the planned probes (each at its own position and resolution) into `folder` like
+// bake_probe_set_from_cloud; the plan goes into the manifest's bake settings.
+[[nodiscard]] BakeSummary
+bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry& geometry,
+                       const ProbePlacement& placement, const ProbePlan& plan,
+                       const PlanSettings& settings, const std::string& folder,
+                       const nlohmann::json& sources, Progress* progress = nullptr);
+
+} // namespace lfprobe

@@ -1,0 +1,48 @@
+// The finest map resolution a probe's data supports, and no finer (issue "model only what a
+// scene needs"; the paper's 3072² maps came out worse than 2048² because its scans did not
+// hold enough points to fill them). A texel of an N×N octahedral map subtends about sqrt(4π)/N
+// radians; a surface at distance r sampled every s metres gives a point every s/r radians. So
+// the data fills texels down to N ≈ sqrt(4π)·r/s, and a finer map only splats the same points
+// over more texels. The estimate takes the front-most point per direction as the probe sees it
+// and a quantile of the N each such point supports; a footprint in metres, when given, caps N
+// where the texels would be finer than wanted at the probe's typical distance.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "lfprobe/local_geometry.hpp"
+#include "lfprobe/point_cloud.hpp"
+
+namespace lfprobe {
+
+struct ResolutionSettings {
+    int min_resolution = 64;
+    int max_resolution = 4096;
+    double quantile = 0.5;       // of the per-direction supported resolutions
+    double footprint = 0.0;      // metres per texel wanted at the median distance; 0: no cap
+    int survey_resolution = 256; // the map the front-most points are found in
+};
+
+struct ResolutionChoice {
+    int resolution = 0;              // the chosen size (one of kResolutionSteps, clamped)
+    double data_resolution = 0.0;    // the N the data supports (before rounding and caps)
+    double footprint_resolution = 0; // the footprint's cap (0: none)
+    double median_distance = 0.0;    // of the front-most points, metres
+    double median_spacing = 0.0;     // of the front-most points, metres
+    std::size_t directions = 0;      // survey texels with a point
+};
+
+// The sizes a choice is rounded down to: powers of two and the halves between them.
+[[nodiscard]] const std::vector<int>& resolution_steps();
+
+// Chooses the resolution for a probe at `centre` (local frame). Throws InputError on bad
+// settings or when no point is seen.
+[[nodiscard]] ResolutionChoice choose_resolution(const PointCloud& cloud,
+                                                 const LocalGeometry& geometry,
+                                                 const glm::dvec3& centre,
+                                                 const ResolutionSettings& settings = {});
+
+} // namespace lfprobe

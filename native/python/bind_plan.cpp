@@ -1,0 +1,140 @@
+// Bindings of probe planning: per-probe resolution from the data, classification, moves and
+// drops, and the bake of a planned set. Options come as a dict so that the CLI and the add-on
+// name only what they change; logic stays in the core.
+#include <chrono>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <pybind11/stl.h>
+
+#include "binding_helpers.hpp"
+#include "bindings.hpp"
+#include "job.hpp"
+#include "lfprobe/error.hpp"
+#include "lfprobe/local_geometry.hpp"
+#include "lfprobe/probe_plan.hpp"
+
+namespace py = pybind11;
+
+namespace lfprobe::python {
+
+namespace {
+
+PlanSettings plan_settings_from(const py::dict& options) {
+    PlanSettings s;
+    for (const auto& item : options) {
+        const auto key = py::str(item.first).cast<std::string>();
+        const py::handle v = item.second;
+        if (key == "auto_resolution") {
+            s.auto_resolution = v.cast<bool>();
+        } else if (key == "resolution") {
+            s.fixed_resolution = v.cast<int>();
+        } else if (key == "min_resolution") {
+            s.resolution.min_resolution = v.cast<int>();
+        } else if (key == "max_resolution") {
+            s.resolution.max_resolution = v.cast<int>();
+        } else if (key == "footprint") {
+            s.resolution.footprint = v.cast<double>();
+        } else if (key == "quantile") {
+            s.resolution.quantile = v.cast<double>();
+        } else if (key == "classify") {
+            s.classify = v.cast<bool>();
+        } else if (key == "clearance") {
+            s.classes.clearance = v.cast<double>();
+        } else if (key == "cell_reach") {
+            s.classes.cell_reach = v.cast<double>();
+        } else if (key == "max_move") {
+            s.max_move = v.cast<double>();
+        } else if (key == "drop") {
+            s.drop = v.cast<bool>();
+        } else if (key == "classify_resolution") {
+            s.classify_resolution = v.cast<int>();
+        } else if (key == "splat_scale") {
+            s.bake.splat_scale = v.cast<float>();
+        } else if (key == "hole_fill_texels") {
+            s.bake.hole_fill_texels = v.cast<int>();
+        } else {
+            throw InputError("plan: unknown option '" + key +
+                             "' (expected auto_resolution, resolution, min_resolution, "
+                             "max_resolution, footprint, quantile, classify, clearance, "
+                             "cell_reach, max_move, drop, classify_resolution, splat_scale, "
+                             "hole_fill_texels)");
+        }
+    }
+    return s;
+}
+
+struct PlanArgs {
+    std::vector<std::vector<double>> positions;
+    std::optional<std::vector<double>> grid_min;
+    std::optional<std::vector<double>> grid_max;
+    std::optional<std::vector<int>> counts;
+};
+
+} // namespace
+
+void bind_plan(py::module_& m) {
+    m.def(
+        "start_plan_probes",
+        [](std::shared_ptr<PointCloud> cloud, std::vector<std::vector<double>> positions,
+           std::optional<std::vector<double>> grid_min, std::optional<std::vector<double>> grid_max,
+           std::optional<std::vector<int>> counts, const py::dict& options) {
+            const PlanSettings settings = plan_settings_from(options);
+            const ProbePlacement placement =
+                placement_from(positions, grid_min, grid_max, counts, cloud->world_offset);
+            const glm::dvec3 offset = cloud->world_offset;
+            return std::make_unique<Job>(
+                std::function<ProbePlan(Progress&)>([=](Progress& progress) {
+                    const LocalGeometry geometry = estimate_local_geometry(*cloud, {}, &progress);
+                    return plan_probes(*cloud, geometry, placement, settings, &progress);
+                }),
+                std::function<py::object(ProbePlan &&)>([offset](ProbePlan&& plan) -> py::object {
+                    return py::module_::import("json").attr("loads")(plan.to_json(offset).dump());
+                }));
+        },
+        py::arg("cloud"), py::arg("positions") = std::vector<std::vector<double>>{},
+        py::arg("grid_min") = py::none(), py::arg("grid_max") = py::none(),
+        py::arg("counts") = py::none(), py::arg("options") = py::dict(),
+        "Start planning probes (world coordinates): per probe the resolution the data supports, "
+        "its class (useful, inside, too_close, blind, idle), moves and drops. The Job's result "
+        "is a list of dicts, one per probe.");
+
+    m.def(
+        "start_bake_planned_probe_set",
+        [](std::shared_ptr<PointCloud> cloud, const std::string& folder,
+           std::vector<std::vector<double>> positions, std::optional<std::vector<double>> grid_min,
+           std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
+           const std::string& sources_json, const py::dict& options) {
+            const PlanSettings settings = plan_settings_from(options);
+            const ProbePlacement placement =
+                placement_from(positions, grid_min, grid_max, counts, cloud->world_offset);
+            const nlohmann::json sources = sources_from(sources_json);
+            return std::make_unique<Job>(
+                std::function<BakeSummary(Progress&)>([=](Progress& progress) {
+                    const auto start = std::chrono::steady_clock::now();
+                    const LocalGeometry geometry = estimate_local_geometry(*cloud, {}, &progress);
+                    const double normals_seconds =
+                        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
+                            .count();
+                    const ProbePlan plan =
+                        plan_probes(*cloud, geometry, placement, settings, &progress);
+                    BakeSummary summary = bake_planned_probe_set(
+                        *cloud, geometry, placement, plan, settings, folder, sources, &progress);
+                    summary.normals_seconds = normals_seconds;
+                    return summary;
+                }),
+                std::function<py::object(BakeSummary &&)>(
+                    [](BakeSummary&& s) -> py::object { return bake_summary_dict(s, true); }));
+        },
+        py::arg("cloud"), py::arg("folder"),
+        py::arg("positions") = std::vector<std::vector<double>>{}, py::arg("grid_min") = py::none(),
+        py::arg("grid_max") = py::none(), py::arg("counts") = py::none(),
+        py::arg("sources_json") = "[]", py::arg("options") = py::dict(),
+        "Start planning and baking a probe set (bake --auto): each probe at its planned position "
+        "and resolution, dropped probes as all-unknown placeholders; the plan goes into the "
+        "manifest. The Job's result is the summary dict.");
+}
+
+} // namespace lfprobe::python

@@ -1,0 +1,206 @@
+#include "lfprobe/probe_plan.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/geometric.hpp>
+
+#include "lfprobe/error.hpp"
+
+namespace lfprobe {
+
+namespace {
+
+using nlohmann::json;
+
+constexpr int kMaxMoves = 4;
+constexpr double kLooseMaxMove = 0.25;
+
+json vec_json(const glm::dvec3& v) {
+    return json::array({v.x, v.y, v.z});
+}
+
+bool needs_move(ProbeClass c) {
+    return c == ProbeClass::Inside || c == ProbeClass::TooClose;
+}
+
+bool worth_keeping(ProbeClass c) {
+    return c == ProbeClass::Useful;
+}
+
+ProbeClassification quick_classify(const PointCloud& cloud, const LocalGeometry& geometry,
+                                   const glm::dvec3& at, const PlanSettings& settings,
+                                   const ClassificationSettings& classes) {
+    BakeSettings quick = settings.bake;
+    quick.resolution = settings.classify_resolution;
+    return classify_probe(bake_probe_from_cloud(cloud, geometry, at, quick), classes);
+}
+
+// A map of `n`² texels that holds no data: a trace over it answers UNKNOWN at once.
+ProbeMap placeholder(int n, const glm::dvec3& at) {
+    ProbeMap map(n, at);
+    for (std::size_t i = 0; i < map.texel_count(); ++i) {
+        map.set_unknown(i);
+    }
+    return map;
+}
+
+} // namespace
+
+json ProbePlan::to_json(const glm::dvec3& world_offset) const {
+    json out = json::array();
+    for (const PlannedProbe& p : probes) {
+        json c{{"surface", p.classification.surface_fraction},
+               {"back_faces", p.classification.back_face_fraction},
+               {"near", p.classification.near_fraction},
+               {"unknown", p.classification.unknown_fraction},
+               {"empty", p.classification.empty_fraction}};
+        if (std::isfinite(p.classification.nearest_surface)) {
+            c["nearest_surface"] = p.classification.nearest_surface;
+        }
+        out.push_back(json{{"position", vec_json(world_offset + p.position)},
+                           {"original", vec_json(world_offset + p.original)},
+                           {"moved_by", glm::length(p.position - p.original)},
+                           {"resolution", p.resolution},
+                           {"found", probe_class_name(p.found)},
+                           {"class", probe_class_name(p.kind)},
+                           {"moved", p.moved},
+                           {"dropped", p.dropped},
+                           {"data_resolution", p.choice.data_resolution},
+                           {"footprint_resolution", p.choice.footprint_resolution},
+                           {"median_distance", p.choice.median_distance},
+                           {"median_spacing", p.choice.median_spacing},
+                           {"classification", c}});
+    }
+    return out;
+}
+
+ProbePlan plan_probes(const PointCloud& cloud, const LocalGeometry& geometry,
+                      const ProbePlacement& placement, const PlanSettings& settings,
+                      Progress* progress) {
+    if (placement.positions.empty()) {
+        throw InputError("plan: no probe positions given");
+    }
+    if (cloud.size() == 0) {
+        throw InputError("plan: the point cloud is empty");
+    }
+    if (settings.classify_resolution < 8 || settings.placeholder_resolution < 1 ||
+        settings.fixed_resolution < 1 || settings.max_move < 0.0) {
+        throw InputError("plan: expected a classify resolution >= 8, placeholder and fixed "
+                         "resolutions >= 1, and max_move >= 0");
+    }
+    ClassificationSettings classes = settings.classes;
+    double max_move = settings.max_move;
+    if (placement.is_grid) {
+        double smallest = std::numeric_limits<double>::infinity();
+        double diagonal2 = 0.0;
+        for (int a = 0; a < 3; ++a) {
+            if (placement.grid.counts[static_cast<std::size_t>(a)] > 1) {
+                smallest = std::min(smallest, placement.grid.spacing[a]);
+                diagonal2 += placement.grid.spacing[a] * placement.grid.spacing[a];
+            }
+        }
+        if (max_move == 0.0 && std::isfinite(smallest)) {
+            max_move = 0.45 * smallest;
+        }
+        // A probe serves the cells around it: nothing within a cell diagonal leaves it idle.
+        if (!(classes.cell_reach > 0.0) && diagonal2 > 0.0) {
+            classes.cell_reach = std::sqrt(diagonal2);
+        }
+    }
+    if (max_move == 0.0) {
+        max_move = kLooseMaxMove;
+    }
+    if (!(classes.cell_reach > 0.0)) {
+        classes.cell_reach = std::numeric_limits<double>::infinity();
+    }
+    const std::size_t count = placement.positions.size();
+    if (progress != nullptr) {
+        progress->begin_stage("planning probes", count);
+    }
+    ProbePlan plan;
+    plan.probes.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        if (progress != nullptr) {
+            progress->throw_if_cancelled();
+        }
+        PlannedProbe& p = plan.probes[i];
+        p.original = placement.positions[i];
+        p.position = p.original;
+        if (settings.classify) {
+            p.classification = quick_classify(cloud, geometry, p.position, settings, classes);
+            p.found = p.classification.kind;
+            for (int move = 0; move < kMaxMoves && needs_move(p.classification.kind); ++move) {
+                const ProbeClassification& c = p.classification;
+                // Inside: out through the nearest surface. Too close: away from the near side.
+                glm::dvec3 step = c.kind == ProbeClass::Inside
+                                      ? c.toward_nearest * (c.nearest_surface + classes.clearance)
+                                      : c.away_from_near * classes.clearance;
+                if (glm::length(step) == 0.0) {
+                    break;
+                }
+                const glm::dvec3 candidate = p.position + step;
+                if (glm::length(candidate - p.original) > max_move) {
+                    break;
+                }
+                p.position = candidate;
+                p.moved = true;
+                p.classification = quick_classify(cloud, geometry, p.position, settings, classes);
+            }
+            p.kind = p.classification.kind;
+            p.dropped = settings.drop && !worth_keeping(p.kind);
+            if (p.moved && p.dropped) {
+                p.position = p.original; // a move that did not help is not kept
+                p.moved = false;
+            }
+        }
+        if (p.dropped) {
+            p.resolution = settings.placeholder_resolution;
+        } else if (settings.auto_resolution) {
+            p.choice = choose_resolution(cloud, geometry, p.position, settings.resolution);
+            p.resolution = p.choice.resolution;
+        } else {
+            p.resolution = settings.fixed_resolution;
+        }
+        if (progress != nullptr) {
+            progress->advance(1);
+        }
+    }
+    return plan;
+}
+
+BakeSummary bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry& geometry,
+                                   const ProbePlacement& placement, const ProbePlan& plan,
+                                   const PlanSettings& settings, const std::string& folder,
+                                   const json& sources, Progress* progress) {
+    if (plan.probes.size() != placement.positions.size()) {
+        throw InputError("bake: the plan has " + std::to_string(plan.probes.size()) +
+                         " probes, the placement " + std::to_string(placement.positions.size()));
+    }
+    ProbeSetManifest manifest;
+    manifest.world_offset = cloud.world_offset;
+    manifest.placement = placement;
+    manifest.bake = json{{"source", "point cloud"},
+                         {"resolution", "per probe (planned)"},
+                         {"splat_scale", settings.bake.splat_scale},
+                         {"max_splat_radius_texels", settings.bake.max_splat_radius_texels},
+                         {"hole_fill_texels", settings.bake.hole_fill_texels},
+                         {"points", cloud.size()},
+                         {"plan", plan.to_json(cloud.world_offset)}};
+    manifest.sources = sources;
+    return write_probe_set(
+        folder, std::move(manifest),
+        [&](std::size_t i) {
+            const PlannedProbe& p = plan.probes[i];
+            if (p.dropped) {
+                return placeholder(p.resolution, p.position);
+            }
+            BakeSettings one = settings.bake;
+            one.resolution = p.resolution;
+            return bake_probe_from_cloud(cloud, geometry, p.position, one, progress);
+        },
+        progress);
+}
+
+} // namespace lfprobe
