@@ -12,7 +12,7 @@ import json
 import sys
 from typing import List, Optional, Sequence
 
-from . import cli_compare, cli_mesh, native
+from . import cli_compare, cli_mesh, cli_report, native
 from .pipeline import BakeOptions, ProbePlacementSpec, bake_from_scans
 from .probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
 from .progress import TerminalProgress
@@ -263,6 +263,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     cli_compare.add_parsers(sub)
     cli_mesh.add_parsers(sub)
+    cli_report.add_parsers(sub)
 
     bench = sub.add_parser("bench", help="benchmarks that print measured figures")
     bench.add_argument("suite", choices=["core", "render"],

@@ -1,0 +1,82 @@
+"""Output files of a report run: every file is written to a temporary name in its folder and
+renamed, so an interrupted run never leaves a half-written report, CSV or image."""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import math
+import os
+import tempfile
+from typing import Dict, Iterable, List
+
+
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+
+
+def write_bytes(path: str, data: bytes) -> None:
+    folder = os.path.dirname(os.path.abspath(path))
+    os.makedirs(folder, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".tmp-", suffix=os.path.basename(path))
+    try:
+        with os.fdopen(fd, "wb") as stream:
+            stream.write(data)
+        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; a report is for sharing
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+def write_text(path: str, text: str) -> None:
+    write_bytes(path, text.encode("utf-8"))
+
+
+def strict_json(value):
+    """Non-finite floats become null (JSON has no inf/NaN); numpy scalars become Python ones."""
+    if hasattr(value, "item") and not isinstance(value, (list, dict, str)):
+        value = value.item()
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    if isinstance(value, dict):
+        return {str(k): strict_json(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [strict_json(v) for v in value]
+    return value
+
+
+def write_json(path: str, value) -> None:
+    write_text(path, json.dumps(strict_json(value), indent=2, allow_nan=False) + "\n")
+
+
+def write_csv(path: str, rows: Iterable[Dict[str, object]]) -> None:
+    """Rows as CSV; the columns are the union of the rows' keys in first-seen order; lists are
+    joined with spaces, dicts written as JSON, missing or non-finite values are empty."""
+    rows = list(rows)
+    columns: List[str] = []
+    for row in rows:
+        for key in row:
+            if key not in columns:
+                columns.append(key)
+    out = io.StringIO()
+    writer = csv.writer(out, lineterminator="\n")
+    writer.writerow(columns)
+    for row in rows:
+        cells = []
+        for key in columns:
+            value = strict_json(row.get(key))
+            if value is None:
+                cells.append("")
+            elif isinstance(value, list):
+                cells.append(" ".join(f"{v:.6g}" if isinstance(v, float) else str(v) for v in value))
+            elif isinstance(value, dict):
+                cells.append(json.dumps(value, sort_keys=True))
+            elif isinstance(value, float):
+                cells.append(f"{value:.6g}")
+            else:
+                cells.append(str(value))
+        writer.writerow(cells)
+    write_text(path, out.getvalue())

@@ -1,0 +1,136 @@
+"""One run's shared state and the measurement every section repeats: render a camera (probes,
+splats, a mesh) and compare it with the Embree ground truth of the same camera."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import sys
+import time
+from typing import Callable, Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from .. import metrics, native
+from .presets import Preset
+from .scene import Scene, View
+
+METRIC_KEYS = ("psnr", "ssim", "flip", "depth_absrel", "depth_rmse", "hole_rate", "false_hit_rate",
+               "false_miss_rate", "unknown_rate")
+
+
+_START = time.perf_counter()
+
+
+def stderr_log(message: str) -> None:
+    """Progress lines on stderr, each with the seconds since the run started."""
+    print(f"[{time.perf_counter() - _START:7.1f} s] {message}", file=sys.stderr, flush=True)
+
+
+def _file_stamp(path: str) -> tuple:
+    info = os.stat(path)
+    return (info.st_size, info.st_mtime_ns)
+
+
+class RunContext:
+    """The scene, preset, native module, reference mesh and work folder of one report run,
+    with a cache of ground-truth images keyed by camera."""
+
+    def __init__(self, scene: Scene, preset: Preset, out_dir: str, threads: int = 0,
+                 log: Callable[[str], None] = stderr_log):
+        self.scene = scene
+        self.preset = preset
+        self.out_dir = os.path.abspath(out_dir)
+        self.work_dir = os.path.join(self.out_dir, "work")
+        self.images_dir = os.path.join(self.out_dir, "images")
+        self.threads = int(threads)
+        self.log = log
+        self.native = native.load()
+        start = time.perf_counter()
+        try:
+            self.mesh = self.native.load_mesh(scene.mesh)
+        except (ValueError, OSError) as error:  # the native reader's InputError / NativeIOError name the line
+            raise ValueError(f"{scene.path}: mesh {scene.mesh}: {error}") from error
+        self.mesh_load_seconds = time.perf_counter() - start
+        self.mesh_stamp = _file_stamp(scene.mesh)
+        os.makedirs(self.work_dir, exist_ok=True)
+        os.makedirs(self.images_dir, exist_ok=True)
+        self._ground_truth: Dict[str, Tuple[dict, dict]] = {}
+        self.views = list(scene.views)
+
+    def mesh_changed(self) -> bool:
+        """True when the scene's mesh file was rewritten after this run loaded it."""
+        return _file_stamp(self.scene.mesh) != self.mesh_stamp
+
+    # --- cameras -----------------------------------------------------------------------------
+    def camera(self, view: View, position: Optional[Sequence[float]] = None) -> dict:
+        return view.camera(self.preset.max_view_width, position)
+
+    def work_path(self, *parts: str) -> str:
+        path = os.path.join(self.work_dir, *parts)
+        os.makedirs(os.path.dirname(path), exist_ok=True)
+        return path
+
+    # --- ground truth ------------------------------------------------------------------------
+    def ground_truth(self, camera: dict, spp: Optional[int] = None, mesh=None,
+                     label: str = "gt") -> Tuple[dict, dict]:
+        """(image, stats) of the Embree ground truth of `camera` (cached for the scene mesh)."""
+        spp = self.preset.gt_spp if spp is None else spp
+        text = json.dumps(camera, sort_keys=True)
+        key = f"{spp}:{text}"
+        if mesh is None and key in self._ground_truth:
+            return self._ground_truth[key]
+        path = self.work_path("gt", f"{label}_{len(self._ground_truth):04d}.exr")
+        job = self.native.start_ground_truth(self.mesh if mesh is None else mesh, text, path,
+                                             spp=spp, threads=self.threads)
+        stats = job.run()
+        image = self.native.read_image(path)
+        os.remove(path)
+        if mesh is None:
+            self._ground_truth[key] = (image, stats)
+        return image, stats
+
+    # --- probe renders -----------------------------------------------------------------------
+    def render_probes(self, field, camera: dict, trace: Dict) -> Tuple[dict, dict]:
+        """(image, stats) of tracing the probes; stats["seconds"] is the fastest of the
+        preset's repeats (this machine is shared: the fastest is the least disturbed)."""
+        text = json.dumps(camera)
+        best_image, best = None, None
+        for _ in range(self.preset.timing_repeats):
+            image, stats = field.render(text, threads=self.threads, **trace)
+            if best is None or stats["seconds"] < best["seconds"]:
+                best_image, best = image, stats
+        return best_image, best
+
+    def cleanup(self, keep: bool) -> None:
+        if not keep:
+            shutil.rmtree(self.work_dir, ignore_errors=True)
+
+
+def measure(reference: dict, test: dict, ppd: float = 67.0) -> Tuple[Dict[str, object], np.ndarray]:
+    """The metrics of lfprobe.core.metrics (PSNR, SSIM, FLIP, depth, confusion) and the FLIP map."""
+    result, error_map = metrics.compare_images_with_map(reference, test, ppd=ppd)
+    row = {key: result[key] for key in METRIC_KEYS}
+    row["confusion"] = result["counts"]
+    return row, error_map
+
+
+def psnr_only(reference: dict, test: dict) -> float:
+    """PSNR alone (as in measure), for controls that need nothing else: FLIP and SSIM cost more."""
+    return metrics.psnr(metrics.visible_colour(reference), metrics.visible_colour(test))
+
+
+def timing(stats: dict, pixels: int) -> Dict[str, float]:
+    seconds = float(stats["seconds"])
+    return {"ms_per_frame": 1000.0 * seconds,
+            "rays_per_second": pixels / seconds if seconds > 0 else math.inf}
+
+
+def nearest_probe_distance(position: Sequence[float], probes: List[Sequence[float]]) -> float:
+    return min(math.dist(position, p) for p in probes)
+
+
+def pixel_count(camera: dict) -> int:
+    return int(camera["resolution"][0]) * int(camera["resolution"][1])

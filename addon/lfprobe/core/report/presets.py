@@ -1,0 +1,69 @@
+"""What each report preset sweeps. `tiny` runs in the tests (well under a minute), `demo` is
+the demo's report (a few minutes on 2 cores for a room), `full` is the benchmark sweep."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Dict, List, Optional, Tuple
+
+# Trace settings: (label, render keyword arguments). The first is the default setting.
+DEFAULT_TRACE = ("default (auto, 2 cm, coarse levels)", {"mode": "auto", "thickness": 0.02, "use_coarse_levels": True})
+TRACE_VARIANTS = [
+    DEFAULT_TRACE,
+    ("no coarse levels", {"mode": "auto", "thickness": 0.02, "use_coarse_levels": False}),
+    ("nearest-first (no grid walk)", {"mode": "nearest", "thickness": 0.02, "use_coarse_levels": True}),
+    ("thickness 1 cm", {"mode": "auto", "thickness": 0.01, "use_coarse_levels": True}),
+    ("thickness 5 cm", {"mode": "auto", "thickness": 0.05, "use_coarse_levels": True}),
+]
+
+# Bake settings compared in the resolution sweep: the project's splatted, hole-filled bake and
+# the paper's one-point-one-texel bake (no footprint, no hole filling).
+BAKE_VARIANTS = {
+    "splat + fill": {"splat_scale": 0.8, "hole_fill_texels": 4},
+    "points only": {"splat_scale": 0.0, "hole_fill_texels": 0},
+}
+
+
+@dataclass
+class Preset:
+    name: str
+    max_view_width: Optional[int]     # views wider than this are scaled down (aspect kept)
+    gt_spp: int                       # samples per pixel of the ground truth (a square)
+    scan_step_factors: List[float]    # scan densities: multiples of the scene's step_deg
+    min_scan_step_deg: float          # ... but never finer than this (keeps tiny tiny)
+    fine_resolutions: List[int]       # probe map resolutions N (N×N)
+    count_factors: List[float]        # probe counts: multiples of the scene grid's counts
+    trace_variants: List[Tuple[str, Dict]]
+    mesh_resolutions: List[int]       # mesh-baked single probe, eye at the probe
+    distance_fractions: List[float]   # eye offsets as fractions of the grid cell's half diagonal
+    timing_repeats: int               # renders per timing (the fastest counts)
+    poisson_depth: int
+    stability_resolution: int
+    bake_variants: List[str] = field(default_factory=lambda: list(BAKE_VARIANTS))
+
+
+PRESETS = {
+    "tiny": Preset("tiny", max_view_width=80, gt_spp=4, scan_step_factors=[8.0, 16.0],
+                   min_scan_step_deg=1.0, fine_resolutions=[64, 128], count_factors=[1.0],
+                   trace_variants=TRACE_VARIANTS[:2], mesh_resolutions=[64, 128, 256],
+                   distance_fractions=[0.0, 0.1, 0.3, 0.6, 1.0], timing_repeats=1,
+                   poisson_depth=6, stability_resolution=64),
+    "demo": Preset("demo", max_view_width=256, gt_spp=16, scan_step_factors=[4.0, 8.0],
+                   min_scan_step_deg=0.25, fine_resolutions=[256, 512, 1024],
+                   count_factors=[0.5, 1.0], trace_variants=TRACE_VARIANTS,
+                   mesh_resolutions=[256, 512, 1024, 2048],
+                   distance_fractions=[0.0, 0.1, 0.3, 0.6, 1.0],
+                   timing_repeats=2, poisson_depth=8, stability_resolution=256),
+    "full": Preset("full", max_view_width=None, gt_spp=16, scan_step_factors=[1.0, 2.0, 4.0],
+                   min_scan_step_deg=0.05, fine_resolutions=[256, 512, 1024, 2048, 3072, 4096],
+                   count_factors=[0.5, 1.0, 2.0], trace_variants=TRACE_VARIANTS,
+                   mesh_resolutions=[256, 512, 1024, 2048, 4096],
+                   distance_fractions=[0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0],
+                   timing_repeats=5, poisson_depth=9, stability_resolution=512),
+}
+
+
+def get_preset(name: str) -> Preset:
+    if name not in PRESETS:
+        raise ValueError(f"unknown preset {name!r}: expected one of {', '.join(PRESETS)}")
+    return PRESETS[name]

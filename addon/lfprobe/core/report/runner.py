@@ -1,0 +1,396 @@
+"""`./lfprobe report`: the whole run. Sweeps, peers and stability cases are measured, then
+report.json, the CSV files, images/*.png and the self-contained report.html are written."""
+
+from __future__ import annotations
+
+import datetime
+import math
+import os
+import platform
+import time
+from typing import Callable, Dict, List, Optional, Sequence
+
+from .. import metrics
+from . import files, html, images, peers, plots, stability
+from .html import num, table, text
+from .measure import RunContext, stderr_log
+from .presets import DEFAULT_TRACE, get_preset
+from .scene import load_scene
+from .sweep import Sweep, aggregate, pareto_front
+
+MIB = 1024.0 * 1024.0
+METRIC_COLUMNS = [
+    ("psnr", "PSNR dB", num(".2f")), ("ssim", "SSIM", num(".4f")), ("flip", "FLIP", num(".4f")),
+    ("depth_absrel", "depth AbsRel", num(".3%", 1.0)), ("hole_rate", "holes", num(".2%")),
+    ("false_hit_rate", "false hits", num(".2%")), ("false_miss_rate", "false misses", num(".2%")),
+]
+
+
+def _finite(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def run_report(scene_path: str, out_dir: str, preset_name: str = "demo", threads: int = 0,
+               keep_work: bool = False, log: Callable[[str], None] = stderr_log) -> Dict[str, object]:
+    """Runs the report for one scene file into out_dir; returns the report's JSON data."""
+    preset = get_preset(preset_name)
+    scene = load_scene(scene_path)
+    if threads < 0:
+        raise ValueError(f"--threads must be 0 (all cores) or more, got {threads}")
+    started = datetime.datetime.now().astimezone()
+    start = time.perf_counter()
+    ctx = RunContext(scene, preset, out_dir, threads, log)
+    log(f"report on {scene.path} (preset {preset.name}) into {ctx.out_dir}")
+    try:
+        sweep = Sweep(ctx)
+        sweep.run()
+        densest = sweep.densities[0]
+        log("peers: splats and the Poisson mesh")
+        splat_rows, splat_images = peers.splat_rows(ctx, densest)
+        poisson_rows, poisson_images, poisson_info = peers.poisson_rows(ctx, densest)
+        stability_cases = stability.run(ctx)
+        data = _report_data(ctx, sweep, splat_rows, poisson_rows, poisson_info, stability_cases)
+        data["started"] = started.isoformat(timespec="seconds")
+        data["seconds"] = time.perf_counter() - start
+        pngs = _write_images(ctx, sweep, data, splat_images, poisson_images)
+        _write_tables(ctx.out_dir, data)
+        files.write_json(os.path.join(ctx.out_dir, "report.json"), data)
+        files.write_text(os.path.join(ctx.out_dir, "report.html"), _page(data, pngs))
+        for density in sweep.densities:
+            density.cloud = None
+    finally:
+        ctx.cleanup(keep_work)
+    log(f"wrote {os.path.join(ctx.out_dir, 'report.html')} in {data['seconds']:.1f} s")
+    return data
+
+
+# --- data ------------------------------------------------------------------------------------
+def _report_data(ctx: RunContext, sweep: Sweep, splat_rows, poisson_rows, poisson_info, cases) -> Dict[str, object]:
+    rows = aggregate(sweep.view_rows)
+    # The front is over the settings a scan allows; mesh-baked probes are the exact reference.
+    scan_rows = [r for r in rows if r["source"] == "scan"]
+    front = {id(scan_rows[i]) for i in pareto_front(scan_rows, "ms_per_frame", "psnr")}
+    for row in rows:
+        row["pareto_front"] = id(row) in front
+    reference = next((r for r in rows if r["setting"] == sweep.reference_setting), None)
+    probe_peer_rows = [dict(r, method=f"probes ({r['setting']})", points=r.get("scan_points"),
+                            preparation_seconds=r["bake_seconds"],
+                            memory_bytes=r["memory_bytes_per_probe"] * r["probes"])
+                       for r in sweep.view_rows if r["setting"] == sweep.reference_setting]
+    s = ctx.scene
+    data = {
+        "format": "lfprobe-report", "format_version": 1,
+        "scene": {"path": s.path, "name": s.name, "title": s.title, "mesh": s.mesh,
+                  "triangles": ctx.mesh.triangle_count, "world_offset": list(ctx.mesh.world_offset),
+                  "scanners": s.scanners, "scan": s.scan,
+                  "grid": {"min": s.grid_min, "max": s.grid_max, "counts": s.grid_counts},
+                  "views": [{"name": v.name, **{k: ctx.camera(v)[k] for k in ("resolution", "lens")}}
+                            for v in ctx.views]},
+        "preset": ctx.preset.name,
+        "machine": {"cpu_count": os.cpu_count(), "threads": ctx.threads or os.cpu_count(),
+                    "platform": platform.platform(), "python": platform.python_version(),
+                    "native_version": getattr(ctx.native, "__version__", None)},
+        "definitions": dict(metrics.DEFINITIONS),
+        "ground_truth": sweep.ground_truth_rows,
+        "densities": [{"step_deg": d.step_deg, "points": d.points, "scan_seconds": d.scan_seconds}
+                      for d in sweep.densities],
+        "reference_setting": sweep.reference_setting,
+        "sweep": rows,
+        "sweep_views": sweep.view_rows,
+        "distance": sweep.distance_rows,
+        "walk": sweep.walk_rows,
+        "at_probe": sweep.at_probe_rows,
+        "peers": {"rows": probe_peer_rows + splat_rows + poisson_rows, "poisson": poisson_info},
+        "stability": cases,
+    }
+    data["findings"] = _findings(data, reference)
+    return data
+
+
+def _series_trend(rows: Sequence[Dict[str, object]], key: str, metric: str) -> List[tuple]:
+    pts = sorted((r[key], r[metric]) for r in rows if _finite(r.get(metric)))
+    return pts
+
+
+def _findings(data: Dict[str, object], reference: Optional[Dict[str, object]]) -> Dict[str, List[str]]:
+    """Sentences stating what the figures of this run show (no figure is typed in by hand)."""
+    f: Dict[str, List[str]] = {"at_probe": [], "distance": [], "resolution": [], "speed": [], "peers": []}
+    by_view: Dict[str, List[Dict[str, object]]] = {}
+    for r in data["at_probe"]:
+        by_view.setdefault(r["view"], []).append(r)
+    for view, rows in by_view.items():
+        pts = _series_trend(rows, "resolution", "psnr_vs_pixel_centre_gt")
+        if len(pts) >= 2:
+            doublings = math.log2(pts[-1][0] / pts[0][0])
+            gain = (pts[-1][1] - pts[0][1]) / doublings if doublings else 0.0
+            f["at_probe"].append(
+                f"View '{view}', eye at the probe's centre, mesh-baked probe: PSNR {pts[0][1]:.2f} dB at "
+                f"{pts[0][0]}² rising to {pts[-1][1]:.2f} dB at {pts[-1][0]}² ({gain:+.2f} dB per doubling of the "
+                "resolution): the error left is the map's resolution.")
+    groups: Dict[tuple, List[Dict[str, object]]] = {}
+    for r in data["distance"]:
+        groups.setdefault((r["source"], r["view"]), []).append(r)
+    for (source, view), rows in groups.items():
+        pts = _series_trend(rows, "distance_to_nearest_probe", "psnr")
+        loss = _series_trend(rows, "distance_to_nearest_probe", "psnr_loss")
+        if len(pts) >= 2:
+            worst = max(loss, key=lambda p: p[1]) if loss else None
+            f["distance"].append(
+                f"{source.capitalize()}-baked probes, view '{view}': PSNR {pts[0][1]:.2f} dB with the eye "
+                f"{pts[0][0]:.3f} m from the nearest probe, {pts[-1][1]:.2f} dB at {pts[-1][0]:.3f} m; "
+                + (f"against a probe at the eye itself the loss is {loss[0][1]:.2f} dB at {loss[0][0]:.3f} m and "
+                   f"{loss[-1][1]:.2f} dB at {loss[-1][0]:.3f} m (largest {worst[1]:.2f} dB at {worst[0]:.3f} m)."
+                   if loss else "no control figures."))
+    series: Dict[str, List[Dict[str, object]]] = {}
+    for r in data["sweep"]:
+        if r["trace"] == DEFAULT_TRACE[0] and r["counts"] == data["scene"]["grid"]["counts"]:
+            key = "mesh (exact)" if r["source"] == "mesh" else f"scan {r['scan_step_deg']:g}°, {r['bake']}"
+            series.setdefault(key, []).append(r)
+    for key, rows in series.items():
+        pts = _series_trend(rows, "resolution", "psnr")
+        if len(pts) >= 2:
+            best = max(pts, key=lambda p: p[1])
+            falls = [f"{a[0]}²→{b[0]}² ({b[1] - a[1]:+.2f} dB)" for a, b in zip(pts, pts[1:]) if b[1] < a[1]]
+            f["resolution"].append(
+                f"{key}: best PSNR {best[1]:.2f} dB at {best[0]}²; "
+                + (f"PSNR falls with more resolution at {', '.join(falls)}." if falls
+                   else "PSNR does not fall as the resolution grows."))
+    front = [r for r in data["sweep"] if r.get("pareto_front")]
+    if front:
+        f["speed"].append("On the Pareto front of time per frame against PSNR (scan-baked settings): " + "; ".join(
+            f"{r['setting']} ({r['ms_per_frame']:.2f} ms, {r['psnr']:.2f} dB)"
+            for r in sorted(front, key=lambda r: r["ms_per_frame"])) + ".")
+    peers_rows = data["peers"]["rows"]
+    methods: Dict[str, List[Dict[str, object]]] = {}
+    for r in peers_rows:
+        methods.setdefault(r["method"].split(" (")[0], []).append(r)
+    for name, rows in methods.items():
+        ms = [r["ms_per_frame"] for r in rows]
+        ps = [r["psnr"] for r in rows if _finite(r.get("psnr"))]
+        if ms and ps:
+            f["peers"].append(f"{name}: {sum(ms) / len(ms):.2f} ms per frame, PSNR {sum(ps) / len(ps):.2f} dB "
+                              f"(mean over {len(rows)} view(s)).")
+    if data["peers"]["poisson"].get("error"):
+        f["peers"].append(f"Poisson mesh not measured: {data['peers']['poisson']['error']}")
+    return f
+
+
+# --- files -----------------------------------------------------------------------------------
+def _write_tables(out_dir: str, data: Dict[str, object]) -> None:
+    def without(rows, *keys):
+        return [{k: v for k, v in r.items() if k not in keys} for r in rows]
+
+    files.write_csv(os.path.join(out_dir, "sweep.csv"), data["sweep"])
+    files.write_csv(os.path.join(out_dir, "sweep_views.csv"), without(data["sweep_views"], "confusion"))
+    files.write_csv(os.path.join(out_dir, "distance.csv"), without(data["distance"], "confusion"))
+    files.write_csv(os.path.join(out_dir, "walk.csv"), without(data["walk"], "confusion"))
+    files.write_csv(os.path.join(out_dir, "at_probe.csv"), data["at_probe"])
+    files.write_csv(os.path.join(out_dir, "peers.csv"), without(data["peers"]["rows"], "confusion"))
+    files.write_csv(os.path.join(out_dir, "stability.csv"), without(data["stability"], "series"))
+    files.write_csv(os.path.join(out_dir, "ground_truth.csv"), data["ground_truth"])
+
+
+def _write_images(ctx: RunContext, sweep: Sweep, data, splat_images, poisson_images) -> Dict[str, bytes]:
+    """Writes images/*.png and returns them by name for embedding."""
+    pngs: Dict[str, bytes] = {}
+
+    def keep(name: str, png: Optional[bytes]) -> None:
+        if png is not None:
+            pngs[name] = png
+            files.write_bytes(os.path.join(ctx.images_dir, name), png)
+
+    rows = data["sweep"]
+    keep("speed_ms_psnr.png", plots.speed_vs_error(rows, "ms_per_frame", "psnr", "time per frame against PSNR, one point per setting"))
+    keep("speed_rays_psnr.png", plots.speed_vs_error(rows, "rays_per_second", "psnr", "rays per second against PSNR"))
+    keep("speed_ms_ssim.png", plots.speed_vs_error(rows, "ms_per_frame", "ssim", "time per frame against SSIM"))
+    keep("speed_ms_flip.png", plots.speed_vs_error(rows, "ms_per_frame", "flip", "time per frame against FLIP"))
+    keep("distance_psnr.png", plots.error_vs_distance(data["distance"], data["walk"], "psnr"))
+    keep("distance_flip.png", plots.error_vs_distance(data["distance"], data["walk"], "flip"))
+    keep("distance_psnr_loss.png", plots.error_vs_distance(data["distance"], [], "psnr_loss"))
+    grid_rows = [r for r in rows if r["trace"] == DEFAULT_TRACE[0] and r["counts"] == ctx.scene.grid_counts]
+    keep("resolution_psnr.png", plots.error_vs_resolution(grid_rows, "psnr"))
+    keep("resolution_flip.png", plots.error_vs_resolution(grid_rows, "flip"))
+    keep("at_probe_psnr.png", plots.at_probe(data["at_probe"]))
+    peer_rows = data["peers"]["rows"]
+    keep("peers_ms.png", plots.bar_peers(peer_rows, "ms_per_frame", "time per frame [ms], log scale",
+                                         "render time per frame, same camera", log=True))
+    keep("peers_psnr.png", plots.bar_peers(peer_rows, "psnr", "PSNR (sRGB) [dB]", "error against the ground truth"))
+    for label, source in (("probes", sweep.reference_images), ("mesh_probes", sweep.mesh_triplets),
+                          ("splats", splat_images), ("poisson", poisson_images)):
+        for view, (gt, test, error_map, row) in source.items():
+            keep(f"triplet_{label}_{view}.png", images.png_bytes(images.triplet(gt, test, error_map)))
+            if label == "probes":
+                keep(f"confusion_{view}.png", plots.confusion_matrix(row["confusion"], f"view '{view}', {label}"))
+    return pngs
+
+
+# --- page ------------------------------------------------------------------------------------
+SETTING_COLUMNS = [
+    ("setting", "setting", text), ("ms_per_frame", "ms/frame", num(".2f")),
+    ("rays_per_second", "M rays/s", num(".2f", 1e-6)), *METRIC_COLUMNS,
+    ("texels_per_ray", "texels/ray", num(".1f")), ("probes_per_ray", "probes/ray", num(".2f")),
+    ("memory_bytes_per_probe", "MiB/probe (memory)", num(".2f", 1 / MIB)),
+    ("disk_bytes_per_probe", "MiB/probe (disk)", num(".2f", 1 / MIB)),
+    ("bake_seconds", "bake s", num(".2f")), ("bake_seconds_per_probe", "bake s/probe", num(".3f")),
+    ("coverage_unknown", "unknown texels", num(".2%")),
+]
+
+
+def _page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
+    scene = data["scene"]
+    page = html.Page(f"lfprobe error analysis: {scene['title']}")
+
+    def img(name: str, caption: str, width: Optional[int] = None, pixelated: bool = False) -> None:
+        if name in pngs:
+            page.add(html.image(pngs[name], caption, width, pixelated))
+
+    def findings(key: str) -> None:
+        for sentence in data["findings"].get(key, []):
+            page.paragraph(sentence, "finding")
+
+    m = data["machine"]
+    page.paragraph(
+        f"Scene {scene['name']} ({scene['path']}), mesh {scene['mesh']} with {scene['triangles']:,} triangles, "
+        f"world offset {tuple(round(c, 3) for c in scene['world_offset'])}. Preset '{data['preset']}', run "
+        f"{data['started']} in {data['seconds']:.1f} s on {m['cpu_count']} cores ({m['threads']} threads), "
+        f"{m['platform']}, Python {m['python']}. Every figure below was measured in this run.")
+    page.paragraph("Scans: " + "; ".join(f"{d['step_deg']:g}° step → {d['points']:,} points "
+                                         f"({d['scan_seconds']:.2f} s)" for d in data["densities"])
+                   + f" from {len(scene['scanners'])} scanner(s). Probe grid {scene['grid']['counts']} from "
+                   f"{scene['grid']['min']} to {scene['grid']['max']}.", "note")
+
+    page.section("definitions", "Metrics")
+    page.add(table([{"metric": k, "definition": v} for k, v in data["definitions"].items()],
+                   [("metric", "metric", text), ("definition", "definition", text)]))
+    page.paragraph("Ground truth: Embree rays against the reference mesh from the same camera (unlit base colour; "
+                   "n×n stratified samples per pixel for the colour). Its agreement with Blender's Cycles "
+                   "(emission-only materials, box filter 1 px) is checked by tests/python/test_cycles_agreement.py.", "note")
+    page.add(table(data["ground_truth"], [("view", "view", text), ("width", "w", num(".0f")), ("height", "h", num(".0f")),
+                                          ("spp", "spp", num(".0f")), ("seconds", "gt render s", num(".3f")),
+                                          ("embree_primary_rays_per_second", "Embree primary M rays/s", num(".2f", 1e-6))]))
+
+    page.section("speed", "Speed against error")
+    page.paragraph("One point per setting: fine resolution, probe count, scan density and bake variant, and trace "
+                   "settings (mode, surface thickness, coarse min-distance levels). Time is the native renderer's own "
+                   "time for the frame (fastest of the preset's repeats), averaged over the views; errors are averaged "
+                   "over the views. Ringed points are on the Pareto front of the scan-baked settings (no other is both faster and "
+                   "better); mesh-baked probes are the exact reference, not an option for scans.", "note")
+    for name, caption in (("speed_ms_psnr.png", "time per frame [ms] against PSNR [dB]"),
+                          ("speed_rays_psnr.png", "rays per second [M rays/s] against PSNR [dB]"),
+                          ("speed_ms_ssim.png", "time per frame [ms] against SSIM"),
+                          ("speed_ms_flip.png", "time per frame [ms] against FLIP (lower is better)")):
+        img(name, caption, 560)
+    findings("speed")
+    page.add(table(data["sweep"], SETTING_COLUMNS, highlight=lambda r: bool(r.get("pareto_front"))))
+    page.paragraph("Highlighted rows: Pareto front of ms/frame against PSNR. Per-view rows: sweep_views.csv.", "note")
+
+    page.section("distance", "Error against the eye's distance from the nearest probe")
+    page.paragraph("Each view's eye is moved from the probe nearest to it toward the centre of the grid cell beside it "
+                   "(the point farthest from every probe), keeping the viewing direction. Mesh-baked probes isolate "
+                   "the tracing error; scan-baked probes add the scan's. Crosses: the scene's walk. What the eye sees "
+                   "changes as it moves, so each eye also gets a control: a mesh-baked probe of the same resolution "
+                   "placed at the eye itself; the PSNR loss against it is the error due to the distance.", "note")
+    img("distance_psnr.png", "PSNR [dB] against distance to the nearest probe [m]", 560)
+    img("distance_flip.png", "FLIP against distance to the nearest probe [m]", 560)
+    img("distance_psnr_loss.png", "PSNR loss [dB] against a mesh-baked probe of the same resolution at the eye, "
+        "against distance to the nearest probe [m]", 560)
+    findings("distance")
+    page.add(table(data["distance"], [("source", "probes", text), ("view", "view", text),
+                                      ("resolution", "N", num(".0f")),
+                                      ("distance_to_nearest_probe", "distance m", num(".3f")),
+                                      ("ms_per_frame", "ms/frame", num(".2f")),
+                                      ("texels_per_ray", "texels/ray", num(".1f")), *METRIC_COLUMNS,
+                                      ("psnr_probe_at_eye", "PSNR dB, probe at eye", num(".2f")),
+                                      ("psnr_loss", "PSNR loss dB", num(".2f"))]))
+    if data["walk"]:
+        page.add("<h3>Walk</h3>")
+        page.add(table(data["walk"], [("frame", "frame", text), ("distance_to_nearest_probe", "distance m", num(".3f")),
+                                      ("ms_per_frame", "ms/frame", num(".2f")), *METRIC_COLUMNS]))
+
+    page.section("at_probe", "Mesh-baked probes from their own centre")
+    page.paragraph("A single probe baked from the mesh (one Embree ray per texel centre) at the grid probe nearest "
+                   "each view, seen from that probe's centre: every camera ray is one texel lookup, so the only error "
+                   "left is the map's resolution. PSNR is against the pixel-centre ground truth (one ray per pixel, as "
+                   "the probe render) and against the supersampled one.", "note")
+    img("at_probe_psnr.png", "PSNR [dB] against probe resolution N", 520)
+    findings("at_probe")
+    gt_key = next((k for k in (data["at_probe"][0] if data["at_probe"] else {}) if k.startswith("psnr_vs_gt_")), None)
+    page.add(table(data["at_probe"], [("view", "view", text), ("resolution", "N", num(".0f")),
+                                      ("texel_angle_deg", "texel °", num(".3f")), ("pixel_angle_deg", "pixel °", num(".3f")),
+                                      ("psnr_vs_pixel_centre_gt", "PSNR dB (pixel centre)", num(".2f")),
+                                      *([(gt_key, "PSNR dB (supersampled gt)", num(".2f"))] if gt_key else []),
+                                      ("ssim_vs_pixel_centre_gt", "SSIM", num(".4f")),
+                                      ("flip_vs_pixel_centre_gt", "FLIP", num(".4f")),
+                                      ("hole_rate", "holes", num(".2%")), ("bake_seconds", "bake s", num(".2f"))]))
+
+    page.section("resolution", "Error against fine resolution at several scan densities")
+    page.paragraph("The paper found 3072² worse than 2048² for its point density: a point baked into one texel leaves "
+                   "near surfaces as sieves at high resolution. 'points only' bakes that way (no footprint, no hole "
+                   "filling); 'splat + fill' splats each point over its footprint and fills small holes.", "note")
+    img("resolution_psnr.png", "PSNR [dB] against fine resolution N", 560)
+    img("resolution_flip.png", "FLIP against fine resolution N", 560)
+    findings("resolution")
+
+    page.section("images", "Images: ground truth | probes | error")
+    page.paragraph(f"Setting: {data['reference_setting']}. Left: ground truth; middle: probe render (magenta: "
+                   "UNKNOWN); right: FLIP error per pixel (magma, black 0 … yellow 1).", "note")
+    for view in [v["name"] for v in scene["views"]]:
+        img(f"triplet_probes_{view}.png", f"view '{view}': ground truth | scan-baked probes | FLIP error", None, True)
+        img(f"confusion_{view}.png", f"view '{view}': confusion of probe answers against ground truth")
+        img(f"triplet_mesh_probes_{view}.png", f"view '{view}': ground truth | mesh-baked probes | FLIP error", None, True)
+
+    page.section("peers", "Peers: splats and a Poisson mesh")
+    page.paragraph("From the densest scan: the raw cloud drawn as z-buffered splats (native, sized by local spacing), "
+                   "and an Open3D screened Poisson mesh (normals estimated per scan, oriented toward its scanner; "
+                   "vertices of the lowest 2% density and outside the cloud's box removed) ray traced with Embree "
+                   "from the same camera. Memory: splats hold positions, colours and spacing (28 B/point); the mesh "
+                   "holds float32 positions, indices and corner colours (Embree's BVH not counted); probes: the "
+                   "loaded maps and coarse levels × probes.", "note")
+    poisson = data["peers"]["poisson"]
+    if poisson.get("error"):
+        page.paragraph(f"Poisson mesh: not available: {poisson['error']}", "fail")
+    else:
+        page.paragraph(f"Poisson reconstruction (depth {poisson['poisson_depth']}): {poisson['reconstruction_seconds']:.2f} s "
+                       f"(normals {poisson['normals_seconds']:.2f} s), {poisson['vertices']:,} vertices, "
+                       f"{poisson['triangles']:,} triangles, {poisson['ply_bytes'] / MIB:.2f} MiB PLY, "
+                       f"{poisson['memory_bytes'] / MIB:.2f} MiB in memory.")
+    findings("peers")
+    page.add(table(data["peers"]["rows"], [("method", "method", text), ("view", "view", text),
+                                           ("preparation_seconds", "preparation s", num(".2f")),
+                                           ("memory_bytes", "memory MiB", num(".2f", 1 / MIB)),
+                                           ("ms_per_frame", "ms/frame", num(".2f")),
+                                           ("rays_per_second", "M pixels/s", num(".2f", 1e-6)), *METRIC_COLUMNS]))
+    img("peers_ms.png", "time per frame [ms] per method and view", 520)
+    img("peers_psnr.png", "PSNR [dB] per method and view", 520)
+    for view in [v["name"] for v in scene["views"]]:
+        img(f"triplet_splats_{view}.png", f"view '{view}': ground truth | splats | FLIP error", None, True)
+        img(f"triplet_poisson_{view}.png", f"view '{view}': ground truth | Poisson mesh | FLIP error", None, True)
+
+    page.section("stability", "Numerical stability")
+    page.paragraph("The hard cases, run on this scene with probes baked from its mesh; each is judged by the "
+                   "stated criterion.", "note")
+    rows = []
+    for case in data["stability"]:
+        figures = {k: v for k, v in case.items() if k not in ("case", "checks", "criterion", "passed", "series")}
+        rows.append({"case": case["case"], "checks": case["checks"], "criterion": case["criterion"],
+                     "result": stability.verdict(case),
+                     "figures": ", ".join(f"{k} = {_short(v)}" for k, v in figures.items())})
+    page.add(table(rows, [("case", "case", text), ("checks", "what it does", text), ("criterion", "criterion", text),
+                          ("result", "result", text), ("figures", "figures", text)]))
+    for case in data["stability"]:
+        if case.get("series"):
+            page.add(f"<h3>{html.esc(case['case'])}</h3>")
+            page.add(table(case["series"], [("epsilon_m", "ε m", num(".0e")),
+                                            ("status_differs", "pixels changing status", num(".3%")),
+                                            ("psnr_vs_lookup", "PSNR dB vs lookup", num(".2f"))]))
+    page.paragraph("Raw figures: report.json, sweep.csv, sweep_views.csv, distance.csv, walk.csv, at_probe.csv, "
+                   "peers.csv, stability.csv, ground_truth.csv beside this file; images in images/.", "note")
+    return page.render()
+
+
+def _short(value) -> str:
+    if isinstance(value, float):
+        return "∞" if math.isinf(value) else f"{value:.4g}"
+    if isinstance(value, list):
+        return "(" + ", ".join(_short(v) for v in value) + ")"
+    return "n/a" if value is None else str(value)

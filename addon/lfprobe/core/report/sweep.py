@@ -1,0 +1,380 @@
+"""The sweep: simulated scans of the scene at several densities, probe sets baked from them
+(fine resolution × probe count × bake variant) and from the mesh, every view traced with every
+trace setting and measured against the Embree ground truth; plus the error against the eye's
+distance from the nearest probe, the walk, and mesh-baked probes seen from their own centre."""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+import time
+from dataclasses import dataclass
+from typing import Dict, List, Optional, Sequence, Tuple
+
+import numpy as np
+
+from .. import pipeline
+from ..cli_mesh import bake_from_mesh
+from ..pipeline import BakeOptions, ProbePlacementSpec
+from .measure import RunContext, measure, nearest_probe_distance, pixel_count, psnr_only, timing
+from .presets import BAKE_VARIANTS, DEFAULT_TRACE
+from .scene import grid_positions
+
+
+@dataclass
+class Density:
+    """One simulated scan density: every scanner of the scene scanned at step_deg."""
+    step_deg: float
+    points: int
+    scan_seconds: float
+    cloud: object
+    paths: List[str]
+
+    @property
+    def label(self) -> str:
+        return f"{self.step_deg:g}° ({self.points:,} points)"
+
+
+@dataclass
+class ProbeSetup:
+    """What one probe set was baked from and how."""
+    source: str                      # "scan" or "mesh"
+    resolution: int
+    counts: List[int]
+    grid_min: List[float]
+    grid_max: List[float]
+    bake_variant: str = "splat + fill"
+    density: Optional[Density] = None
+
+    @property
+    def probes(self) -> int:
+        return self.counts[0] * self.counts[1] * self.counts[2]
+
+    def positions(self) -> List[List[float]]:
+        return grid_positions(self.grid_min, self.grid_max, self.counts)
+
+    def describe(self) -> Dict[str, object]:
+        return {
+            "source": self.source,
+            "scan_step_deg": None if self.density is None else self.density.step_deg,
+            "scan_points": None if self.density is None else self.density.points,
+            "resolution": self.resolution,
+            "counts": list(self.counts),
+            "probes": self.probes,
+            "bake": self.bake_variant if self.source == "scan" else "mesh (Embree, exact)",
+        }
+
+
+def scaled_grid(ctx: RunContext, factor: float) -> Tuple[List[float], List[float], List[int]]:
+    """The scene grid with counts × factor (at least 1; an axis left with one probe puts it
+    in the middle of the grid's extent)."""
+    s = ctx.scene
+    counts = [max(1, int(round(c * factor))) for c in s.grid_counts]
+    lo, hi = list(s.grid_min), list(s.grid_max)
+    for axis in range(3):
+        if counts[axis] == 1:
+            lo[axis] = hi[axis] = 0.5 * (s.grid_min[axis] + s.grid_max[axis])
+    return lo, hi, counts
+
+
+def simulate_scans(ctx: RunContext) -> List[Density]:
+    """Scans the mesh from every scanner position at each of the preset's densities."""
+    s, p = ctx.scene, ctx.preset
+    steps = sorted({max(s.scan["step_deg"] * f, p.min_scan_step_deg) for f in p.scan_step_factors})
+    densities = []
+    for step in steps:
+        paths, seconds = [], 0.0
+        for index, scanner in enumerate(s.scanners):
+            path = ctx.work_path("scans", f"scan_{step:g}deg_{index}.xyz")
+            stats = ctx.native.start_simulate_scan(
+                ctx.mesh, path, list(scanner), step_deg=step, noise_mm=s.scan["noise_mm"],
+                vertical_fov=s.scan["vertical_fov"], seed=index + 1).run()
+            seconds += stats["seconds"]
+            paths.append(path)
+        cloud = pipeline.load_scans(paths, s.scanners, cache_dir="")
+        density = Density(step, len(cloud), seconds, cloud, paths)
+        ctx.log(f"  scan at {step:g}°: {density.points:,} points from {len(paths)} scanner(s) in {seconds:.2f} s")
+        densities.append(density)
+    return densities
+
+
+def bake(ctx: RunContext, setup: ProbeSetup, folder: str) -> Dict[str, object]:
+    """Bakes one probe set; returns its bake time and memory figures."""
+    placement = ProbePlacementSpec(grid_min=setup.grid_min, grid_max=setup.grid_max, counts=setup.counts)
+    if setup.source == "mesh":
+        options = BakeOptions(resolution=setup.resolution)
+        start = time.perf_counter()
+        summary = bake_from_mesh([ctx.scene.mesh], folder, placement, options)
+        wall = time.perf_counter() - start
+        bake_seconds = summary["bake_seconds"]
+    else:
+        variant = BAKE_VARIANTS[setup.bake_variant]
+        options = BakeOptions(resolution=setup.resolution, splat_scale=variant["splat_scale"],
+                              hole_fill_texels=variant["hole_fill_texels"])
+        start = time.perf_counter()
+        summary = pipeline.bake_from_cloud(setup.density.cloud, folder, placement, options)
+        wall = time.perf_counter() - start
+        bake_seconds = summary["bake_seconds"] + summary.get("normals_seconds", 0.0)
+    coverage = summary["mean_coverage"]
+    return {
+        "bake_seconds": bake_seconds,
+        "bake_seconds_per_probe": bake_seconds / setup.probes,
+        "bake_wall_seconds": wall,
+        "disk_bytes_per_probe": summary["bytes_on_disk"] / setup.probes,
+        "coverage_surface": coverage["surface"],
+        "coverage_inferred": coverage["inferred"],
+        "coverage_unknown": coverage["unknown"],
+    }
+
+
+def _row(setup: ProbeSetup, bake_info: dict, memory_per_probe: float, trace_label: str,
+         trace: dict, view: str) -> Dict[str, object]:
+    row = {"setting": "", "view": view, **setup.describe(), "trace": trace_label,
+           "mode": trace["mode"], "thickness": trace["thickness"],
+           "coarse_levels": trace["use_coarse_levels"], "memory_bytes_per_probe": memory_per_probe}
+    row.update(bake_info)
+    row["setting"] = setting_label(row)
+    return row
+
+
+def setup_label(row: Dict[str, object]) -> str:
+    """"scan 1°, splat + fill, 512², 2×3×2 probes" for a row or ProbeSetup.describe()."""
+    source = (f"scan {row['scan_step_deg']:g}°, {row['bake']}" if row["source"] == "scan" else "mesh")
+    counts = "×".join(str(c) for c in row["counts"])
+    return f"{source}, {row['resolution']}², {counts} probes"
+
+
+def setting_label(row: Dict[str, object]) -> str:
+    return f"{setup_label(row)}, {row['trace']}"
+
+
+class Sweep:
+    """Runs the sweep and holds its rows and the images the report shows."""
+
+    def __init__(self, ctx: RunContext):
+        self.ctx = ctx
+        self.view_rows: List[Dict[str, object]] = []
+        self.distance_rows: List[Dict[str, object]] = []
+        self.walk_rows: List[Dict[str, object]] = []
+        self.at_probe_rows: List[Dict[str, object]] = []
+        self.ground_truth_rows: List[Dict[str, object]] = []
+        self.densities: List[Density] = []
+        self.reference_images: Dict[str, Tuple[dict, dict, np.ndarray, dict]] = {}
+        self.reference_setting: Optional[str] = None
+        self.mesh_triplets: Dict[str, Tuple[dict, dict, np.ndarray, dict]] = {}
+        self._controls: Dict[tuple, float] = {}
+
+    # --- the parts ---------------------------------------------------------------------------
+    def run(self) -> None:
+        ctx, p = self.ctx, self.ctx.preset
+        ctx.log("ground truth of every view (Embree)")
+        for view in ctx.views:
+            camera = ctx.camera(view)
+            _, stats = ctx.ground_truth(camera)
+            self.ground_truth_rows.append({
+                "view": view.name, "width": camera["resolution"][0], "height": camera["resolution"][1],
+                "spp": p.gt_spp, "seconds": stats["seconds"], "rays": stats["rays"],
+                "rays_per_second": stats["rays_per_second"],
+                "embree_primary_rays_per_second": ctx.native.embree_throughput(
+                    ctx.mesh, json.dumps(camera), threads=ctx.threads,
+                    repeats=p.timing_repeats)["rays_per_second"],
+            })
+        ctx.log("simulated scans")
+        self.densities = simulate_scans(ctx)
+        densest = self.densities[0]
+        reference_res = p.fine_resolutions[len(p.fine_resolutions) // 2]
+        full_grid = scaled_grid(ctx, 1.0)
+        setups: List[Tuple[ProbeSetup, List]] = []
+        for density in self.densities:
+            for res in p.fine_resolutions:
+                for variant in p.bake_variants:
+                    setup = ProbeSetup("scan", res, full_grid[2], full_grid[0], full_grid[1], variant, density)
+                    is_reference = density is densest and res == reference_res and variant == "splat + fill"
+                    setups.append((setup, p.trace_variants if is_reference else [DEFAULT_TRACE]))
+        for factor in p.count_factors:
+            if factor != 1.0:
+                lo, hi, counts = scaled_grid(ctx, factor)
+                setups.append((ProbeSetup("scan", reference_res, counts, lo, hi, "splat + fill", densest),
+                               [DEFAULT_TRACE]))
+        for res in p.fine_resolutions:
+            setups.append((ProbeSetup("mesh", res, full_grid[2], full_grid[0], full_grid[1]), [DEFAULT_TRACE]))
+
+        for index, (setup, traces) in enumerate(setups):
+            folder = ctx.work_path("probes", f"set_{index:03d}")
+            info = bake(ctx, setup, folder)
+            field = ctx.native.ProbeField.load(folder)
+            memory_per_probe = field.memory_bytes / field.probe_count
+            is_reference = (setup.source == "scan" and setup.density is densest and setup.resolution == reference_res
+                            and setup.bake_variant == "splat + fill" and setup.counts == full_grid[2])
+            is_mesh_reference = setup.source == "mesh" and setup.resolution == reference_res
+            ctx.log(f"  [{index + 1}/{len(setups)}] {setup_label(setup.describe())}: "
+                    f"bake {info['bake_seconds']:.2f} s, {memory_per_probe / 2**20:.2f} MiB/probe")
+            for trace_label, trace in traces:
+                for view in ctx.views:
+                    camera = ctx.camera(view)
+                    gt, _ = ctx.ground_truth(camera)
+                    image, stats = ctx.render_probes(field, camera, trace)
+                    figures, error_map = measure(gt, image)
+                    row = _row(setup, info, memory_per_probe, trace_label, trace, view.name)
+                    row.update(timing(stats, pixel_count(camera)))
+                    row.update({"texels_per_ray": stats["mean_steps"], "probes_per_ray": stats["mean_probes"]})
+                    row.update(figures)
+                    self.view_rows.append(row)
+                    if trace_label == DEFAULT_TRACE[0] and (is_reference or is_mesh_reference):
+                        target = self.reference_images if is_reference else self.mesh_triplets
+                        target[view.name] = (gt, image, error_map, row)
+            if is_reference:
+                self.reference_setting = _row(setup, info, memory_per_probe, *DEFAULT_TRACE, "")["setting"]
+                self.distance_sweep(field, setup, "scan")
+                self.walk(field, setup)
+            if is_mesh_reference:
+                self.distance_sweep(field, setup, "mesh")
+            del field
+            shutil.rmtree(folder, ignore_errors=True)
+        self.at_probe()
+
+    def _anchor_and_target(self, view, positions: List[List[float]]) -> Tuple[List[float], List[float]]:
+        """The probe nearest the view's eye, and the point the eye moves toward: the centre of
+        the grid cell beside that probe toward the grid's middle (the farthest point from every
+        probe), or 0.5 m along the view direction for a single probe."""
+        anchor = min(positions, key=lambda q: math.dist(q, view.position))
+        s = self.ctx.scene
+        spacing = [(hi - lo) / (n - 1) if n > 1 else 0.0 for lo, hi, n in zip(s.grid_min, s.grid_max, s.grid_counts)]
+        middle = [0.5 * (lo + hi) for lo, hi in zip(s.grid_min, s.grid_max)]
+        target = [a + (0.5 * d if m >= a else -0.5 * d) for a, d, m in zip(anchor, spacing, middle)]
+        if math.dist(target, anchor) == 0.0:
+            direction = np.subtract(view.look_at, view.position)
+            target = list(np.asarray(anchor) + 0.5 * direction / np.linalg.norm(direction))
+        return anchor, target
+
+    def distance_sweep(self, field, setup: ProbeSetup, source: str) -> None:
+        """Error as the eye leaves the nearest probe toward the cell centre (default trace)."""
+        ctx = self.ctx
+        positions = setup.positions()
+        for view in ctx.views:
+            anchor, target = self._anchor_and_target(view, positions)
+            for fraction in ctx.preset.distance_fractions:
+                eye = [a + fraction * (t - a) for a, t in zip(anchor, target)]
+                camera = ctx.camera(view, eye)
+                gt, _ = ctx.ground_truth(camera)
+                image, stats = ctx.render_probes(field, camera, DEFAULT_TRACE[1])
+                figures, _ = measure(gt, image)
+                control = self._probe_at_eye_psnr(view, eye, setup.resolution, camera, gt)
+                row = {"source": source, "view": view.name, "resolution": setup.resolution,
+                       "fraction_to_cell_centre": fraction, "eye": eye,
+                       "distance_to_nearest_probe": nearest_probe_distance(eye, positions),
+                       **timing(stats, pixel_count(camera)), "texels_per_ray": stats["mean_steps"], **figures,
+                       "psnr_probe_at_eye": control,
+                       "psnr_loss": control - figures["psnr"] if math.isfinite(control) and math.isfinite(figures["psnr"]) else None}
+                self.distance_rows.append(row)
+        ctx.log(f"  error against distance from the nearest probe ({source} probes): "
+                f"{len(ctx.views) * len(ctx.preset.distance_fractions)} eyes")
+
+    def _probe_at_eye_psnr(self, view, eye: List[float], resolution: int, camera: dict, gt: dict) -> float:
+        """PSNR of a mesh-baked probe of the same resolution placed at the eye itself: what this
+        view would score with no distance to travel (the control that removes what the eye sees
+        from the comparison between positions)."""
+        key = (view.name, tuple(eye), resolution)
+        if key not in self._controls:
+            ctx = self.ctx
+            folder = ctx.work_path("probes", "probe_at_eye")
+            bake_from_mesh([ctx.scene.mesh], folder, ProbePlacementSpec(positions=[eye]), BakeOptions(resolution=resolution))
+            image, _ = ctx.render_probes(ctx.native.ProbeField.load(folder), camera, DEFAULT_TRACE[1])
+            shutil.rmtree(folder, ignore_errors=True)
+            self._controls[key] = psnr_only(gt, image)
+        return self._controls[key]
+
+    def walk(self, field, setup: ProbeSetup) -> None:
+        ctx = self.ctx
+        positions = setup.positions()
+        for view in ctx.scene.walk_views():
+            camera = ctx.camera(view)
+            gt, _ = ctx.ground_truth(camera)
+            image, stats = ctx.render_probes(field, camera, DEFAULT_TRACE[1])
+            figures, _ = measure(gt, image)
+            self.walk_rows.append({"frame": view.name, "eye": view.position,
+                                   "distance_to_nearest_probe": nearest_probe_distance(view.position, positions),
+                                   **timing(stats, pixel_count(camera)), **figures})
+
+    def at_probe(self) -> None:
+        """Mesh-baked single probes at the probe nearest each view, seen from their own centre:
+        the error left is the map's resolution (and the image's pixel sampling)."""
+        ctx = self.ctx
+        positions = ctx.scene.probe_positions()
+        for res in ctx.preset.mesh_resolutions:
+            for view in ctx.views:
+                anchor = min(positions, key=lambda q: math.dist(q, view.position))
+                folder = ctx.work_path("probes", f"at_probe_{res}_{view.name}")
+                placement = ProbePlacementSpec(positions=[anchor])
+                start = time.perf_counter()
+                summary = bake_from_mesh([ctx.scene.mesh], folder, placement, BakeOptions(resolution=res))
+                bake_wall = time.perf_counter() - start
+                field = ctx.native.ProbeField.load(folder)
+                camera = ctx.camera(view, anchor)
+                gt_centre, _ = ctx.ground_truth(camera, spp=1)
+                gt_super, _ = ctx.ground_truth(camera)
+                image, stats = ctx.render_probes(field, camera, DEFAULT_TRACE[1])
+                centre, _ = measure(gt_centre, image)
+                supersampled = psnr_only(gt_super, image)
+                w = camera["resolution"][0]
+                fov = 2.0 * math.atan(0.5 * camera["sensor_width"] / camera["lens"])
+                self.at_probe_rows.append({
+                    "view": view.name, "resolution": res, "eye": anchor,
+                    "texel_angle_deg": math.degrees(math.sqrt(4.0 * math.pi) / res),
+                    "pixel_angle_deg": math.degrees(fov / w),
+                    "psnr_vs_pixel_centre_gt": centre["psnr"], "ssim_vs_pixel_centre_gt": centre["ssim"],
+                    "flip_vs_pixel_centre_gt": centre["flip"], "depth_absrel": centre["depth_absrel"],
+                    "hole_rate": centre["hole_rate"],
+                    f"psnr_vs_gt_{ctx.preset.gt_spp}spp": supersampled,
+                    "bake_seconds": summary["bake_seconds"], "bake_wall_seconds": bake_wall,
+                    "texels_per_ray": stats["mean_steps"], **timing(stats, pixel_count(camera)),
+                })
+                del field
+                shutil.rmtree(folder, ignore_errors=True)
+        ctx.log(f"  mesh-baked probes at their own centre: {len(self.at_probe_rows)} renders")
+
+
+def aggregate(view_rows: Sequence[Dict[str, object]]) -> List[Dict[str, object]]:
+    """One row per setting: metrics and ms per frame averaged over the views, rays per second
+    as all rays over all seconds."""
+    groups: Dict[str, List[Dict[str, object]]] = {}
+    for row in view_rows:
+        groups.setdefault(row["setting"], []).append(row)
+    out = []
+    for setting, rows in groups.items():
+        first = rows[0]
+        merged = {k: v for k, v in first.items() if k != "view"}
+        merged["views"] = len(rows)
+        for key in ("psnr", "ssim", "flip", "depth_absrel", "depth_rmse", "hole_rate", "false_hit_rate",
+                    "false_miss_rate", "unknown_rate", "ms_per_frame", "texels_per_ray", "probes_per_ray"):
+            values = [r[key] for r in rows if r.get(key) is not None and math.isfinite(r[key])]
+            merged[key] = float(np.mean(values)) if values else None
+        seconds = sum(r["ms_per_frame"] for r in rows) / 1000.0
+        rays = sum(r["rays_per_second"] * r["ms_per_frame"] / 1000.0 for r in rows)
+        merged["rays_per_second"] = rays / seconds if seconds > 0 else None
+        merged.pop("confusion", None)
+        out.append(merged)
+    return out
+
+
+def pareto_front(rows: Sequence[Dict[str, object]], cost: str, quality: str, higher_is_better: bool = True) -> List[int]:
+    """Indices of the rows no other row beats: at most the cost with at least the quality,
+    strictly better in one of them."""
+    points = [(r.get(cost), r.get(quality)) for r in rows]
+    front = []
+    for i, (c, q) in enumerate(points):
+        if c is None or q is None:
+            continue
+        q_i = q if higher_is_better else -q
+        dominated = False
+        for j, (c2, q2) in enumerate(points):
+            if j == i or c2 is None or q2 is None:
+                continue
+            q_j = q2 if higher_is_better else -q2
+            if c2 <= c and q_j >= q_i and (c2 < c or q_j > q_i):
+                dominated = True
+                break
+        if not dominated:
+            front.append(i)
+    return front
