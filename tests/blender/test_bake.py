@@ -154,3 +154,30 @@ def test_mesh_source_bakes_through_mesh_export():
     assert _wall_error(first, (1, 0, 0), 2.0) < 1e-3
     assert _wall_error(second, (1, 0, 0), 1.0) < 1e-3
     assert _wall_error(second, (0, 0, -1), 2.0) < 1e-3
+
+
+def test_plan_from_data_sizes_moves_and_shows_the_probes():
+    """Plan From Data: each probe at the resolution the 5 cm scan supports (capped by the grid's
+    Resolution), a probe against the wall moved off it; the plan goes onto the grid, and the
+    overlay colours moved probes blue."""
+    _saved_scene()
+    scan, grid_obj, _path = _box_room_grid(counts=(2, 1, 1), margin=0.0)
+    grid = grid_obj.lfprobe_grid
+    grid.resolution = 512
+    grid.plan_from_data = True
+    # margin 0: the corner probes sit on the room's walls.
+    assert bpy.ops.object.lfprobe_bake() == {"FINISHED"}
+    plan = grid.plan()
+    assert len(plan) == 2
+    assert all(p["found"] in ("too_close", "inside") for p in plan), plan
+    assert any(p["moved"] for p in plan), plan
+    manifest = helpers.addon("core.probe_set").read_manifest(helpers.addon("blender.grid").probe_dir_abspath(grid_obj))
+    for record, planned in zip(manifest["probes"], plan):
+        assert record["resolution"] == planned["resolution"] <= 512
+    overlay = helpers.addon("blender.overlay")
+    _positions, colours, _lines = overlay.overlay_geometry(grid_obj)
+    for colour, planned in zip(colours, plan):
+        if planned["dropped"]:
+            np.testing.assert_allclose(colour, overlay.DROPPED_COLOUR, atol=1e-6)
+        elif planned["moved"]:
+            np.testing.assert_allclose(colour, overlay.MOVED_COLOUR, atol=1e-6)

@@ -159,8 +159,16 @@ class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
             grid_min=list(low + self._offset), grid_max=list(high + self._offset), counts=list(grid.counts)
         )
         self._options = pipeline.BakeOptions(resolution=grid.resolution)
+        if grid.plan_from_data:
+            # The grid's resolution is the largest a planned probe may get.
+            self._options.plan = {"auto_resolution": True, "max_resolution": int(grid.resolution),
+                                  "min_resolution": min(64, int(grid.resolution))}
         shutil.rmtree(self._staging, ignore_errors=True)  # left by a crashed Blender
         if meshes:
+            if grid.plan_from_data:
+                self.report({"ERROR"}, "Probe bake: Plan From Data works from scan points; "
+                                       "turn it off for mesh sources")
+                return None
             return self._start_mesh_bake(context, meshes)
         paths = [p for obj in scans for p in obj.lfprobe_scan.paths()]
         scanners = [s for obj in scans for s in obj.lfprobe_scan.scanners()]
@@ -214,6 +222,7 @@ class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
             return {"FINISHED"}
         grid = grid_obj.lfprobe_grid
         grid.coverage_json = json.dumps([p.get("coverage", {}) for p in manifest["probes"]])
+        grid.plan_json = json.dumps(manifest.get("bake", {}).get("plan", []))
         grid.baked = True
         mean = result.get("mean_coverage", {})
         self.report(

@@ -34,6 +34,25 @@ def coverage_colours(coverage: list, probe_count: int) -> np.ndarray:
     return colours
 
 
+# Planned probes (Plan From Data) by what the plan found: moved ones and dropped ones stand
+# out from the coverage colours of the probes kept where they were.
+MOVED_COLOUR = (0.2, 0.6, 1.0, 1.0)
+DROPPED_COLOUR = (0.15, 0.15, 0.15, 1.0)
+
+
+def plan_colours(colours: np.ndarray, plan: list) -> np.ndarray:
+    """Coverage colours with moved probes in blue and dropped probes in near-black."""
+    if len(plan) != len(colours):
+        return colours
+    out = colours.copy()
+    for i, probe in enumerate(plan):
+        if probe.get("dropped"):
+            out[i] = DROPPED_COLOUR
+        elif probe.get("moved"):
+            out[i] = MOVED_COLOUR
+    return out
+
+
 def cell_lines(obj) -> np.ndarray:
     """Line segment end points (2k, 3) of the grid's cells: every row of probes along each axis."""
     positions = grid_module.probe_positions(obj)
@@ -52,7 +71,8 @@ def cell_lines(obj) -> np.ndarray:
 def overlay_geometry(obj):
     """(probe positions (n, 3), probe colours (n, 4), line end points (2k, 3)) as float32."""
     positions = grid_module.probe_positions(obj)
-    colours = coverage_colours(obj.lfprobe_grid.coverage(), len(positions))
+    colours = plan_colours(coverage_colours(obj.lfprobe_grid.coverage(), len(positions)),
+                           obj.lfprobe_grid.plan())
     return positions.astype(np.float32), colours, cell_lines(obj).astype(np.float32)
 
 
@@ -71,7 +91,7 @@ def _batches(obj):
     from gpu_extras.batch import batch_for_shader
 
     grid = obj.lfprobe_grid
-    key = (tuple(map(tuple, obj.matrix_world)), tuple(grid.counts), grid.coverage_json)
+    key = (tuple(map(tuple, obj.matrix_world)), tuple(grid.counts), grid.coverage_json, grid.plan_json)
     cached = _batch_cache.get(obj.name)
     if cached is not None and cached[0] == key:
         return cached[1]

@@ -90,6 +90,7 @@ class LFPROBE_PT_grid(bpy.types.Panel):
         layout.prop(grid, "counts")
         layout.prop(grid, "resolution")
         layout.prop(grid, "coarse_resolution")
+        layout.prop(grid, "plan_from_data")
         layout.label(text="Sources")
         row = layout.row()
         row.template_list("LFPROBE_UL_grid_sources", "", grid, "sources", grid, "active_source_index", rows=3)
@@ -103,6 +104,14 @@ class LFPROBE_PT_grid(bpy.types.Panel):
         if grid.baked and coverage:
             known = sum(1.0 - c.get("unknown", 1.0) for c in coverage) / len(coverage)
             layout.label(text=f"Baked: {len(coverage)} probes, {100 * known:.0f}% of directions known", icon="CHECKMARK")
+            plan = grid.plan()
+            if plan:
+                moved = sum(1 for p in plan if p.get("moved"))
+                dropped = sum(1 for p in plan if p.get("dropped"))
+                sizes = sorted({int(p.get("resolution", 0)) for p in plan if not p.get("dropped")})
+                size_text = f"{sizes[0]}²–{sizes[-1]}²" if sizes else "none kept"
+                layout.label(text=f"Plan: {moved} moved (blue), {dropped} dropped (black), maps {size_text}",
+                             icon="INFO")
             counts = tuple(grid.counts)
             if len(coverage) != counts[0] * counts[1] * counts[2]:
                 layout.label(text="The counts changed since the bake: bake again", icon="INFO")

@@ -110,12 +110,30 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
         options=_BLEND_RELATIVE,
         default="",
     )
+    plan_from_data: BoolProperty(
+        name="Plan From Data",
+        description="Before baking, give each probe the resolution its points support (Resolution "
+        "is then the largest allowed), move probes out of geometry and off walls, and drop "
+        "the ones that stay useless (scan sources only)",
+        default=False,
+    )
+    plan_json: StringProperty(
+        name="Plan",
+        description="Per-probe plan after a planned bake (JSON list: class, moved, dropped, resolution)",
+        default="[]",
+    )
     baked: BoolProperty(name="Baked", default=False)
     coverage_json: StringProperty(
         name="Coverage",
         description="Per-probe coverage after baking (JSON list of {surface, inferred, empty, unknown})",
         default="[]",
     )
+
+    def plan(self) -> list:
+        try:
+            return list(json.loads(self.plan_json or "[]"))
+        except ValueError:
+            return []
 
     def coverage(self) -> list:
         try:

@@ -12,7 +12,7 @@ import json
 import sys
 from typing import List, Optional, Sequence
 
-from . import cli_compare, cli_mesh, cli_report, native
+from . import cli_compare, cli_mesh, cli_place, cli_report, native
 from .pipeline import BakeOptions, ProbePlacementSpec, bake_from_scans
 from .probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
 from .progress import TerminalProgress
@@ -43,6 +43,10 @@ def _cmd_bake(args) -> int:
         hole_fill_texels=args.hole_fill,
         normal_neighbours=args.normal_k,
     )
+    if args.auto:
+        if args.mesh:
+            raise ValueError("--auto plans from scan points: use it with --scan")
+        options.plan = cli_place.plan_options(args)
     progress = None if args.quiet else TerminalProgress()
     if args.mesh:
         options.extra["supersample"] = args.supersample
@@ -68,7 +72,8 @@ def _print_bake_summary(args, summary: dict, source: str) -> int:
         return 0
     cov = summary["mean_coverage"]
     n = summary["probe_count"]
-    print(f"baked {n} probe(s) at {args.res}² from {source} into {summary['folder']}")
+    size = "planned resolutions" if getattr(args, "auto", False) else f"{args.res}²"
+    print(f"baked {n} probe(s) at {size} from {source} into {summary['folder']}")
     timing = []
     if "normals_seconds" in summary:
         timing.append(f"normals {summary['normals_seconds']:.2f} s")
@@ -217,6 +222,11 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--normal-k", type=int, default=12, help="neighbours for PCA normals")
     bake.add_argument("--json", action="store_true", help="print the summary as JSON")
     bake.add_argument("--quiet", action="store_true", help="no progress output")
+    bake.add_argument("--auto", action="store_true",
+                      help="scans: plan first (see `place`): each probe at the resolution its "
+                           "points support (--res is then ignored), probes inside geometry or "
+                           "against walls moved, useless ones dropped")
+    cli_place.add_plan_arguments(bake)
     bake.set_defaults(run=_cmd_bake)
 
     info = sub.add_parser("info", help="what a probe set holds")
@@ -264,6 +274,7 @@ def build_parser() -> argparse.ArgumentParser:
     cli_compare.add_parsers(sub)
     cli_mesh.add_parsers(sub)
     cli_report.add_parsers(sub)
+    cli_place.add_parsers(sub)
 
     bench = sub.add_parser("bench", help="benchmarks that print measured figures")
     bench.add_argument("suite", choices=["core", "render"],

@@ -42,6 +42,10 @@ class BakeOptions:
     hole_fill_texels: int = 4
     normal_neighbours: int = 12
     extra: dict = field(default_factory=dict)
+    # None: every probe at `resolution`. A dict: plan first (bake --auto): per-probe resolution
+    # from the data, classification, moves and drops, with these options of
+    # _native.start_bake_planned_probe_set (e.g. {"min_resolution": 64, "max_resolution": 2048}).
+    plan: Optional[dict] = None
 
 
 def load_scans(
@@ -93,9 +97,34 @@ def bake_from_cloud(
         hole_fill_texels=int(options.hole_fill_texels),
         normal_neighbours=int(options.normal_neighbours),
     )
+    if options.plan is not None:
+        plan = {"resolution": int(options.resolution), "splat_scale": float(options.splat_scale),
+                "hole_fill_texels": int(options.hole_fill_texels), **options.plan}
+        job = _native.start_bake_planned_probe_set(
+            cloud, out_dir, positions=kwargs["positions"], grid_min=kwargs["grid_min"],
+            grid_max=kwargs["grid_max"], counts=kwargs["counts"],
+            sources_json=kwargs["sources_json"], options=plan)
+        return job if start_only else job.run(progress)
     if start_only:
         return _native.start_bake_probe_set(cloud, out_dir, **kwargs)
     return _native.bake_probe_set(cloud, out_dir, progress=progress, **kwargs)
+
+
+def plan_probes(cloud, placement: ProbePlacementSpec, plan_options: dict,
+                progress: Progress = None) -> list:
+    """Plans probes without baking them: one dict per probe (position, resolution, class,
+    moved, dropped, the figures behind them). World coordinates."""
+    _native = native.load()
+    placement.validate()
+    job = _native.start_plan_probes(
+        cloud,
+        positions=[list(map(float, p)) for p in placement.positions],
+        grid_min=None if placement.grid_min is None else list(map(float, placement.grid_min)),
+        grid_max=None if placement.grid_max is None else list(map(float, placement.grid_max)),
+        counts=None if placement.counts is None else [int(c) for c in placement.counts],
+        options=dict(plan_options),
+    )
+    return job.run(progress)
 
 
 def bake_from_scans(
