@@ -1,23 +1,62 @@
 #!/usr/bin/env bash
-# The demo: builds what is missing, then runs the scan → probe pipeline on the real pump-room
-# laser scan from ../shared/data and prints what the probe set holds and where it is.
+# The demo, from a fresh clone on Debian 12: installs and builds what is missing (tools/setup.sh),
+# builds the lab room scene if it is missing (Blender headless when Blender is installed, since
+# it also writes blend/lab_room.blend; the bpy-free generator otherwise), then runs the report
+# on it: four simulated scans of the room, probe grids baked from them, views at a probe,
+# between probes, near a wall and along a walk rendered by tracing the probes and by Embree
+# (ground truth), compared, and written to out/demo/report.html with the images under
+# out/demo/images/. Progress and the time of every step go to the terminal.
+# Environment: LFPROBE_DEMO_OUT (default out/demo), LFPROBE_DEMO_PRESET (default demo),
+# LFPROBE_THREADS (default 0: every core), LFPROBE_REBUILD_SCENE=1 (rebuild the scene).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
-data="${LFPROBE_SHARED_DATA:-$root/../shared/data}"
-out="$root/out/demo"
+out="${LFPROBE_DEMO_OUT:-$root/out/demo}"
+preset="${LFPROBE_DEMO_PRESET:-demo}"
+threads="${LFPROBE_THREADS:-0}"
+scene_json="blend/lab_room/lab_room.scene.json"
+demo_start=$(date +%s)
+step_start=$demo_start
+
+step_done() {  # prints how long the step took
+  local now
+  now=$(date +%s)
+  echo "   ($1: $((now - step_start)) s)"
+  step_start=$now
+}
+
+echo "== 1/3 build: tools/setup.sh (installs what is missing, builds the native core) =="
 bash tools/setup.sh
+step_done "build"
+
+echo "== 2/3 scene: the lab room (blend/lab_room/, blend/lab_room.blend) =="
 mkdir -p "$out"
-echo "== bake: pump-room scan (155,201 points), a probe at the scanner and a 3×3×2 grid in the room =="
-./lfprobe bake --scan "$data/scans/pumpA_xyzrgb.xyz" --scanner 0 0 0 \
-  --probe 0 0 0 --res 1024 --out "$out/pump_at_scanner" --cache "$out/cache"
-./lfprobe bake --scan "$data/scans/pumpA_xyzrgb.xyz" --scanner 0 0 0 \
-  --grid-min -2 -4 -0.5 --grid-max 0.5 -1.5 0.5 --counts 3 3 2 --res 512 \
-  --out "$out/pump_grid" --cache "$out/cache"
-echo "== what the probe sets hold =="
-./lfprobe info "$out/pump_at_scanner"
-./lfprobe info "$out/pump_grid" --json > "$out/pump_grid_info.json"
-./lfprobe info "$out/pump_grid"
+# Built when missing (or with LFPROBE_REBUILD_SCENE=1 after changing blend/scenes/): the
+# generator is seeded, so a rebuild writes the same geometry and textures.
+if [ "${LFPROBE_REBUILD_SCENE:-0}" = "1" ] || [ ! -f "$scene_json" ] || [ ! -f blend/lab_room.blend ]; then
+  if command -v blender >/dev/null 2>&1; then
+    echo "building blend/lab_room.blend and its OBJ, textures and scene file with Blender (headless)"
+    log="$out/blender_scene_build.log"
+    if ! blender -b --factory-startup --python-exit-code 1 -P blend/build_blend.py -- lab_room >"$log" 2>&1; then
+      tail -n 20 "$log" >&2
+      echo "demo: building the lab room in Blender failed (log: $log)" >&2
+      exit 1
+    fi
+    grep '^blend ' "$log"
+  else
+    echo "building blend/lab_room/ with the bpy-free generator (Blender is not installed)"
+    /usr/bin/python3 -m blend.scenes lab_room
+  fi
+else
+  echo "up to date: $scene_json, blend/lab_room.blend"
+fi
+step_done "scene"
+
+echo "== 3/3 report: scans, probe bakes, probe renders, ground truth, comparison (preset $preset) =="
+./lfprobe report --scene "$scene_json" --out "$out" --preset "$preset" --threads "$threads"
+step_done "report"
+
 echo
-echo "probe sets: $out/pump_at_scanner and $out/pump_grid (manifest.json + one EXR per probe);"
-echo "open a probe_*.exr in Blender's Image Editor to see its radiance, distance (Z) and normals."
+echo "demo finished in $(( $(date +%s) - demo_start )) s: open $out/report.html"
+echo "(images in $out/images/, tables in $out/*.csv, data in $out/report.json;"
+echo " the scene in Blender: blender blend/lab_room.blend)"
