@@ -11,6 +11,9 @@ DEFAULT_TRACE = ("default (auto, 2 cm, coarse levels)", {"mode": "auto", "thickn
 TRACE_VARIANTS = [
     DEFAULT_TRACE,
     ("no coarse levels", {"mode": "auto", "thickness": 0.02, "use_coarse_levels": False}),
+    # Coarse resolution: the coarsest min-distance level kept (ProbeField.load(coarse_resolution)).
+    ("coarse levels down to 32²", {"mode": "auto", "thickness": 0.02, "use_coarse_levels": True,
+                                   "coarse_resolution": 32}),
     ("nearest-first (no grid walk)", {"mode": "nearest", "thickness": 0.02, "use_coarse_levels": True}),
     ("thickness 1 cm", {"mode": "auto", "thickness": 0.01, "use_coarse_levels": True}),
     ("thickness 5 cm", {"mode": "auto", "thickness": 0.05, "use_coarse_levels": True}),

@@ -132,7 +132,9 @@ def _row(setup: ProbeSetup, bake_info: dict, memory_per_probe: float, trace_labe
          trace: dict, view: str) -> Dict[str, object]:
     row = {"setting": "", "view": view, **setup.describe(), "trace": trace_label,
            "mode": trace["mode"], "thickness": trace["thickness"],
-           "coarse_levels": trace["use_coarse_levels"], "memory_bytes_per_probe": memory_per_probe}
+           "coarse_levels": trace["use_coarse_levels"],
+           "coarse_resolution": int(trace.get("coarse_resolution", 0)) or 1,
+           "memory_bytes_per_probe": memory_per_probe}
     row.update(bake_info)
     row["setting"] = setting_label(row)
     return row
@@ -211,12 +213,18 @@ class Sweep:
             ctx.log(f"  [{index + 1}/{len(setups)}] {setup_label(setup.describe())}: "
                     f"bake {info['bake_seconds']:.2f} s, {memory_per_probe / 2**20:.2f} MiB/probe")
             for trace_label, trace in traces:
+                # A coarse resolution is a load-time setting: that variant loads its own field.
+                coarse = int(trace.get("coarse_resolution", 0))
+                render_args = {k: v for k, v in trace.items() if k != "coarse_resolution"}
+                trace_field = (field if coarse == 0
+                               else ctx.native.ProbeField.load(folder, coarse_resolution=coarse))
+                trace_memory = trace_field.memory_bytes / trace_field.probe_count
                 for view in ctx.views:
                     camera = ctx.camera(view)
                     gt, _ = ctx.ground_truth(camera)
-                    image, stats = ctx.render_probes(field, camera, trace)
+                    image, stats = ctx.render_probes(trace_field, camera, render_args)
                     figures, error_map = measure(gt, image)
-                    row = _row(setup, info, memory_per_probe, trace_label, trace, view.name)
+                    row = _row(setup, info, trace_memory, trace_label, trace, view.name)
                     row.update(timing(stats, pixel_count(camera)))
                     row.update({"texels_per_ray": stats["mean_steps"], "probes_per_ray": stats["mean_probes"]})
                     row.update(figures)
