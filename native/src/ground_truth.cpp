@@ -129,43 +129,12 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
 }
 
 ThroughputResult embree_throughput(const EmbreeScene& scene, const Camera& camera, int repeats) {
-    if (repeats < 1) {
-        throw InputError("embree throughput: repeats must be at least 1");
-    }
-    const glm::dvec3 offset = scene.mesh().world_offset;
-    std::vector<Ray> rays(static_cast<std::size_t>(camera.width) *
-                          static_cast<std::size_t>(camera.height));
-    for (int y = 0; y < camera.height; ++y) {
-        for (int x = 0; x < camera.width; ++x) {
-            rays[static_cast<std::size_t>(y) * static_cast<std::size_t>(camera.width) +
-                 static_cast<std::size_t>(x)] = camera.local_pixel_ray(x, y, offset);
-        }
-    }
-    ThroughputResult result;
-    result.rays = rays.size();
-    result.repeats = repeats;
-    result.seconds = std::numeric_limits<double>::infinity();
-    for (int rep = 0; rep < repeats; ++rep) {
-        std::atomic<std::uint64_t> hits{0};
-        const auto start = std::chrono::steady_clock::now();
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1024),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              std::uint64_t local = 0;
-                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
+    return measure_throughput(camera, scene.mesh().world_offset, repeats, "embree",
+                              [&](const Ray& ray) {
                                   float t = 0.0f;
                                   std::uint32_t tri = 0;
-                                  local += scene.intersect_fast(rays[i], t, tri) ? 1 : 0;
-                              }
-                              hits.fetch_add(local, std::memory_order_relaxed);
-                          });
-        const double seconds =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        result.seconds = std::min(result.seconds, seconds);
-        result.hits = hits.load();
-    }
-    result.rays_per_second =
-        result.seconds > 0.0 ? static_cast<double>(result.rays) / result.seconds : 0.0;
-    return result;
+                                  return scene.intersect_fast(ray, t, tri);
+                              });
 }
 
 } // namespace lfprobe

@@ -84,49 +84,13 @@ FieldTraceResult trace_camera_ray(const ProbeField& field, int eye_probe, const 
 
 ThroughputResult probe_trace_throughput(const ProbeField& field, const Camera& camera,
                                         const RenderSettings& settings, int repeats) {
-    if (repeats < 1) {
-        throw InputError("probe trace throughput: repeats must be at least 1");
-    }
     FieldTraceSettings trace = settings.trace;
     trace.mode = field.resolve_mode(settings.trace);
     const glm::dvec3 offset = field.world_offset();
     const int eye_probe = probe_at(field, camera.position() - offset, trace.probe);
-    std::vector<Ray> rays(static_cast<std::size_t>(camera.width) *
-                          static_cast<std::size_t>(camera.height));
-    for (int y = 0; y < camera.height; ++y) {
-        for (int x = 0; x < camera.width; ++x) {
-            rays[static_cast<std::size_t>(y) * static_cast<std::size_t>(camera.width) +
-                 static_cast<std::size_t>(x)] = camera.local_pixel_ray(x, y, offset);
-        }
-    }
-    ThroughputResult result;
-    result.rays = rays.size();
-    result.repeats = repeats;
-    result.seconds = std::numeric_limits<double>::infinity();
-    for (int rep = 0; rep < repeats; ++rep) {
-        std::atomic<std::uint64_t> hits{0};
-        const auto start = std::chrono::steady_clock::now();
-        // The same blocks as Embree's measurement (ground_truth.cpp).
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1024),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              std::uint64_t local = 0;
-                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                                  local +=
-                                      trace_camera_ray(field, eye_probe, rays[i], trace).status ==
-                                              TraceStatus::Hit
-                                          ? 1
-                                          : 0;
-                              }
-                              hits.fetch_add(local, std::memory_order_relaxed);
-                          });
-        const double seconds =
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        result.seconds = std::min(result.seconds, seconds);
-        result.hits = hits.load();
-    }
-    result.rays_per_second =
-        result.seconds > 0.0 ? static_cast<double>(result.rays) / result.seconds : 0.0;
-    return result;
+    return measure_throughput(camera, offset, repeats, "probe trace", [&](const Ray& ray) {
+        return trace_camera_ray(field, eye_probe, ray, trace).status == TraceStatus::Hit;
+    });
 }
 
 RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,

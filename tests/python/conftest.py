@@ -1,3 +1,4 @@
+import importlib.util
 import os
 import subprocess
 import sys
@@ -22,6 +23,16 @@ def shared_data():
     if not os.path.isdir(SHARED_DATA):
         pytest.fail(f"test data not found at {SHARED_DATA} (set LFPROBE_SHARED_DATA)")
     return SHARED_DATA
+
+
+def report_scene_module():
+    """tests/data/report_scene/make_scene.py: writes the small room scene (OBJ, MTL, texture,
+    scene JSON) that the report and the Cycles agreement tests use."""
+    path = os.path.join(ROOT, "tests", "data", "report_scene", "make_scene.py")
+    spec = importlib.util.spec_from_file_location("report_make_scene", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
 
 
 def run_cli(*args, check=False, timeout=600):

@@ -5,7 +5,6 @@ Runs tests/blender/cycles_agreement.py inside `blender -b --factory-startup`. Bl
 required (CI installs Debian's blender): without it this test fails, it does not skip.
 """
 
-import importlib.util
 import json
 import os
 import shutil
@@ -15,7 +14,7 @@ import time
 import numpy as np
 import pytest
 
-from conftest import ROOT
+from conftest import ROOT, report_scene_module
 
 from lfprobe.core import metrics
 
@@ -25,18 +24,10 @@ CYCLES_SAMPLES = 256
 GT_SPP = 64  # 8×8 stratified samples: converged well below 8-bit steps at this image size
 
 
-def _make_scene_module():
-    path = os.path.join(ROOT, "tests", "data", "report_scene", "make_scene.py")
-    spec = importlib.util.spec_from_file_location("report_make_scene", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="module")
 def scene(tmp_path_factory):
     folder = tmp_path_factory.mktemp("cycles_scene")
-    scene_path = _make_scene_module().write_scene(str(folder))
+    scene_path = report_scene_module().write_scene(str(folder))
     from lfprobe.core.report.scene import load_scene
 
     return load_scene(scene_path)

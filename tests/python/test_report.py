@@ -3,7 +3,6 @@ the page, its figures in JSON and CSV, images embedded), scene-file errors, the 
 and mesh-baked probes reproducing the ground truth from their own centre."""
 
 import csv
-import importlib.util
 import json
 import os
 import re
@@ -11,24 +10,16 @@ import shutil
 
 import pytest
 
-from conftest import ROOT, run_cli
+from conftest import ROOT, report_scene_module, run_cli
 
 from lfprobe.core import metrics
 
 SECTIONS = ["definitions", "speed", "distance", "at_probe", "resolution", "images", "peers", "stability"]
 
 
-def _make_scene_module():
-    path = os.path.join(ROOT, "tests", "data", "report_scene", "make_scene.py")
-    spec = importlib.util.spec_from_file_location("report_make_scene", path)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
 @pytest.fixture(scope="module")
 def scene_path(tmp_path_factory):
-    return _make_scene_module().write_scene(str(tmp_path_factory.mktemp("report_scene")))
+    return report_scene_module().write_scene(str(tmp_path_factory.mktemp("report_scene")))
 
 
 @pytest.fixture(scope="module")

@@ -3,7 +3,21 @@
 // the calling task arena's threads. Ray generation and writing pixels are not in the figure.
 #pragma once
 
+#include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cstdint>
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "lfprobe/camera.hpp"
+#include "lfprobe/error.hpp"
+#include "lfprobe/ray.hpp"
 
 namespace lfprobe {
 
@@ -14,5 +28,47 @@ struct ThroughputResult {
     double rays_per_second = 0.0;
     int repeats = 0;
 };
+
+// Times `is_hit(const Ray&) -> bool` over the camera's pixel-centre rays in the local frame of
+// `world_offset`. `who` names the tracer in errors.
+template <class IsHit>
+[[nodiscard]] ThroughputResult measure_throughput(const Camera& camera,
+                                                  const glm::dvec3& world_offset, int repeats,
+                                                  const std::string& who, IsHit&& is_hit) {
+    if (repeats < 1) {
+        throw InputError(who + " throughput: repeats must be at least 1");
+    }
+    std::vector<Ray> rays(static_cast<std::size_t>(camera.width) *
+                          static_cast<std::size_t>(camera.height));
+    for (int y = 0; y < camera.height; ++y) {
+        for (int x = 0; x < camera.width; ++x) {
+            rays[static_cast<std::size_t>(y) * static_cast<std::size_t>(camera.width) +
+                 static_cast<std::size_t>(x)] = camera.local_pixel_ray(x, y, world_offset);
+        }
+    }
+    ThroughputResult result;
+    result.rays = rays.size();
+    result.repeats = repeats;
+    result.seconds = std::numeric_limits<double>::infinity();
+    for (int rep = 0; rep < repeats; ++rep) {
+        std::atomic<std::uint64_t> hits{0};
+        const auto start = std::chrono::steady_clock::now();
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1024),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              std::uint64_t local = 0;
+                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                                  local += is_hit(rays[i]) ? 1 : 0;
+                              }
+                              hits.fetch_add(local, std::memory_order_relaxed);
+                          });
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        result.seconds = std::min(result.seconds, seconds);
+        result.hits = hits.load();
+    }
+    result.rays_per_second =
+        result.seconds > 0.0 ? static_cast<double>(result.rays) / result.seconds : 0.0;
+    return result;
+}
 
 } // namespace lfprobe
