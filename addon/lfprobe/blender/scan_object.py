@@ -13,6 +13,7 @@ and the object shows its bounds so that it can be clicked.
 from __future__ import annotations
 
 import json
+import math
 import os
 
 import bpy
@@ -165,8 +166,23 @@ def scan_objects(scene) -> list:
     return [obj for obj in scene.objects if obj.type == "MESH" and obj.lfprobe_scan.is_scan]
 
 
+# A scene whose objects sit in a georeferenced frame (world = offset + Blender location) names
+# it in this custom property, as the demo scenes do (blend/build_blend.py): Blender's float32
+# locations cannot hold UTM coordinates themselves.
+SCENE_OFFSET_PROPERTY = "lfprobe_world_offset"
+
+
 def frame_offset(scene):
-    """The world offset the scene's scan objects share (their local frame), or None."""
+    """The scene's world offset: its `lfprobe_world_offset` property when set, else the one
+    the scene's scan objects share (their local frame), else None."""
+    explicit = scene.get(SCENE_OFFSET_PROPERTY)
+    if explicit is not None:
+        try:
+            values = [float(v) for v in explicit]
+        except (TypeError, ValueError):
+            values = []
+        if len(values) == 3 and all(math.isfinite(v) for v in values):
+            return tuple(values)
     for obj in scan_objects(scene):
         return obj.lfprobe_scan.offset()
     return None
