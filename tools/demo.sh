@@ -25,11 +25,11 @@ step_done() {  # prints how long the step took
   step_start=$now
 }
 
-echo "== 1/3 build: tools/setup.sh (installs what is missing, builds the native core) =="
+echo "== 1/4 build: tools/setup.sh (installs what is missing, builds the native core) =="
 bash tools/setup.sh
 step_done "build"
 
-echo "== 2/3 scene: the lab room (blend/lab_room/, blend/lab_room.blend) =="
+echo "== 2/4 scene: the lab room (blend/lab_room/, blend/lab_room.blend) =="
 mkdir -p "$out"
 # Built when missing (or with LFPROBE_REBUILD_SCENE=1 after changing blend/scenes/): the
 # generator is seeded, so a rebuild writes the same geometry and textures.
@@ -52,11 +52,35 @@ else
 fi
 step_done "scene"
 
-echo "== 3/3 report: scans, probe bakes, probe renders, ground truth, comparison (preset $preset) =="
+echo "== 3/4 report: scans, probe bakes, probe renders, ground truth, comparison (preset $preset) =="
 ./lfprobe report --scene "$scene_json" --out "$out" --preset "$preset" --threads "$threads"
 step_done "report"
+
+echo "== 4/4 Blender (headless): four scans imported into the lab room .blend, its probe grid baked,"
+echo "   the view between probes traced by the add-on's engine and compared with ground truth =="
+if command -v blender >/dev/null 2>&1; then
+  bdir="$out/blender"
+  mkdir -p "$bdir/scans"
+  i=0
+  # The scene file's four scanner positions, at the report's 1° step.
+  while read -r x y z; do
+    i=$((i + 1))
+    ./lfprobe scan --mesh blend/lab_room/lab_room.obj --at "$x" "$y" "$z" --step-deg 1 \
+      --noise-mm 1 --out "$bdir/scans/scan_$i.xyz" --quiet
+  done < <(/usr/bin/python3 -c "import json,sys; [print(*p) for p in json.load(open(sys.argv[1]))['scanners']]" "$scene_json")
+  batch() { blender -b "$1" --factory-startup --python-exit-code 1 -P addon/lfprobe/cli.py -- "${@:2}" 2>&1 | grep '^lfprobe' || { echo "demo: the Blender step '$2' failed" >&2; exit 1; }; }
+  batch blend/lab_room.blend import --scan "$bdir"/scans/scan_*.xyz --grid-from probe_grid \
+    --resolution 512 --save-as "$bdir/lab_room.blend"
+  batch "$bdir/lab_room.blend" bake
+  batch "$bdir/lab_room.blend" render --camera between_probes --out "$bdir/between_probes.exr"
+  batch "$bdir/lab_room.blend" compare --reference-collection geometry --camera between_probes \
+    --out "$bdir/compare"
+else
+  echo "skipped: Blender is not installed (apt-get install blender)"
+fi
+step_done "Blender"
 
 echo
 echo "demo finished in $(( $(date +%s) - demo_start )) s: open $out/report.html"
 echo "(images in $out/images/, tables in $out/*.csv, data in $out/report.json;"
-echo " the scene in Blender: blender blend/lab_room.blend)"
+echo " the scene in Blender with its baked probes: blender $out/blender/lab_room.blend)"

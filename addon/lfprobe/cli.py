@@ -1,5 +1,6 @@
-"""Headless batch entry of the Blender add-on: bake, render and compare a saved scene.
+"""Headless batch entry of the Blender add-on: import scans, bake, render and compare a saved scene.
 
+    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- import --scan FILE... [--grid-from EMPTY] --save-as OUT.blend
     blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- bake [--grid NAME]
     blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- render [--camera NAME] --out IMG.exr
     blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- compare --reference OBJ... --out DIR
@@ -89,6 +90,74 @@ def _depsgraph(scene):
     return depsgraph
 
 
+def _cmd_import(package, args) -> int:
+    """Imports scans and gives the scene a probe grid baking from them: an existing box Empty
+    (--grid-from, e.g. the demo scenes' probe_grid with its "counts") or a new grid fitted to
+    the scans."""
+    import bpy
+
+    grid_module = _blender_module(package, "grid")
+    scene = _scene(args.scene)
+    paths = [os.path.abspath(p) for p in args.scan]
+    for path in paths:
+        if not os.path.isfile(path):
+            raise BatchError(f"--scan: no file {path}")
+    before = set(bpy.data.objects)
+    for folder in sorted({os.path.dirname(p) for p in paths}):
+        names = [os.path.basename(p) for p in paths if os.path.dirname(p) == folder]
+        try:
+            result = bpy.ops.import_scene.lfprobe_scan(directory=folder, files=[{"name": n} for n in names])
+        except RuntimeError as error:  # the operator's ERROR report
+            raise BatchError(str(error).strip()) from error
+        if result != {"FINISHED"}:
+            raise BatchError(f"importing {', '.join(names)} did not finish ({', '.join(result)})")
+    scans = sorted((o for o in bpy.data.objects if o not in before), key=lambda o: o.name)
+    print(f"lfprobe: imported {sum(o.lfprobe_scan.point_count for o in scans):,} points from "
+          f"{len(paths)} file(s) into {len(scans)} object(s)")
+    if args.grid_from:
+        grid_obj = scene.objects.get(args.grid_from)
+        if grid_obj is None or grid_obj.type != "EMPTY":
+            raise BatchError(f"--grid-from: no Empty named '{args.grid_from}' in scene '{scene.name}'")
+        grid = grid_obj.lfprobe_grid
+        grid.is_grid = True
+        if not grid.probe_dir:
+            grid.probe_dir = grid_module.default_probe_dir(grid_obj)
+        stored = grid_obj.get("counts")
+        if stored is not None and len(stored) == 3:
+            grid.counts = [int(c) for c in stored]
+        for scan in scans:
+            grid.sources.add().obj = scan
+    else:
+        for obj in bpy.context.view_layer.objects:
+            obj.select_set(obj in scans)
+        bpy.ops.object.lfprobe_grid_add()
+        grid_obj = bpy.context.view_layer.objects.active
+        if bpy.ops.object.lfprobe_grid_fit(margin=args.margin, spacing=args.spacing) != {"FINISHED"}:
+            raise BatchError("fitting the new grid to the scans failed")
+        grid = grid_obj.lfprobe_grid
+    try:
+        grid_module.grid_box(grid_obj)
+    except grid_module.GridError as error:
+        raise BatchError(str(error)) from error
+    if args.counts:
+        grid.counts = args.counts
+    if args.resolution:
+        grid.resolution = args.resolution
+    grid.plan_from_data = args.plan
+    counts = tuple(grid.counts)
+    print(f"lfprobe: grid '{grid_obj.name}': {counts[0]}×{counts[1]}×{counts[2]} probes at "
+          f"{grid.resolution}²{' (planned from the data)' if grid.plan_from_data else ''}, "
+          f"{len(grid.sources)} source(s)")
+    target = os.path.abspath(args.save_as) if args.save_as else bpy.data.filepath
+    if not target:
+        raise BatchError("the scene is not saved to a .blend: pass --save-as FILE.blend")
+    if not os.path.isdir(os.path.dirname(target)):
+        raise BatchError(f"--save-as {args.save_as}: the folder {os.path.dirname(target)} does not exist")
+    bpy.ops.wm.save_as_mainfile(filepath=target, relative_remap=True)
+    print(f"lfprobe: saved {target}")
+    return EXIT_OK
+
+
 def _cmd_bake(package, args) -> int:
     import bpy
 
@@ -148,10 +217,21 @@ def _cmd_render(package, args) -> int:
 
 
 def _cmd_compare(package, args) -> int:
+    import bpy
+
     compare = _blender_module(package, "compare")
     scene = _scene(args.scene)
     references = []
-    for name in args.reference:
+    if args.reference_collection:
+        collection = bpy.data.collections.get(args.reference_collection)
+        if collection is None:
+            raise BatchError(f"--reference-collection: no collection named '{args.reference_collection}'")
+        references = [o for o in collection.all_objects if o.type == "MESH"]
+        if not references:
+            raise BatchError(f"--reference-collection: '{collection.name}' holds no mesh")
+    elif not args.reference:
+        raise BatchError("compare needs --reference OBJ... or --reference-collection NAME")
+    for name in args.reference or ():
         obj = scene.objects.get(name)
         if obj is None:
             raise BatchError(f"--reference: no object named '{name}' in scene '{scene.name}'")
@@ -174,6 +254,19 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--scene", default="", help="scene to use (default: the file's active scene)")
     sub = parser.add_subparsers(dest="command", required=True)
 
+    imp = sub.add_parser("import", help="import scans and set up a probe grid baking from them; save")
+    imp.add_argument("--scan", nargs="+", required=True, metavar="FILE", help=".xyz/.pts/.ply scans")
+    imp.add_argument("--grid-from", default="", metavar="EMPTY",
+                     help="make this box Empty the grid (its 'counts' property is used), "
+                          "instead of a new grid fitted to the scans")
+    imp.add_argument("--counts", nargs=3, type=int, metavar=("NX", "NY", "NZ"))
+    imp.add_argument("--resolution", type=int, default=0, help="probe map resolution (default: the grid's)")
+    imp.add_argument("--plan", action="store_true", help="Plan From Data: per-probe resolution, moves, drops")
+    imp.add_argument("--margin", type=float, default=0.25, help="new grid: metres inside the scans' bounds")
+    imp.add_argument("--spacing", type=float, default=0.0, help="new grid: largest probe spacing (0: keep counts)")
+    imp.add_argument("--save-as", metavar="FILE.blend", help="save here (default: over the opened .blend)")
+    imp.set_defaults(run=_cmd_import)
+
     bake = sub.add_parser("bake", help="bake the scene's probe grids and save the .blend")
     bake.add_argument("--grid", default="", metavar="NAME", help="bake only this grid (default: every grid)")
     bake.add_argument("--no-save", action="store_true", help="do not save the .blend afterwards")
@@ -193,7 +286,9 @@ def build_parser() -> argparse.ArgumentParser:
     render.set_defaults(run=_cmd_render)
 
     compare = sub.add_parser("compare", help="ground truth of reference meshes vs the probes, with metrics")
-    compare.add_argument("--reference", nargs="+", required=True, metavar="OBJ", help="reference mesh objects")
+    compare.add_argument("--reference", nargs="+", metavar="OBJ", help="reference mesh objects")
+    compare.add_argument("--reference-collection", metavar="NAME",
+                         help="every mesh of this collection (and its children) as the reference")
     compare.add_argument("--out", required=True, metavar="DIR", help="report folder (created)")
     compare.add_argument("--camera", default="", metavar="NAME", help="camera object (default: the scene camera)")
     compare.add_argument("--grid", default="", metavar="NAME", help="probe grid (default as for render)")

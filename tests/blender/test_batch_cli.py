@@ -98,3 +98,49 @@ def test_bad_input_exits_non_zero_with_a_message():
     result = probe_scene.run_batch(blend, "paint")
     assert result.returncode == 2
     _check(result, "usage:")
+
+
+def test_import_sets_up_a_grid_that_bakes_and_compares_by_collection():
+    """`import` brings scans into a saved scene with a grid fitted to them (or an existing box
+    Empty made the grid); `bake` then works on the saved file, and `compare` takes a
+    collection of reference meshes. Missing scans are refused with exit status 2."""
+    folder = helpers.tmp_dir()
+    probe_scene.add_camera()
+    room = probe_scene.add_room_mesh()
+    references = bpy.data.collections.new("reference")
+    bpy.context.scene.collection.children.link(references)
+    references.objects.link(room)
+    box = bpy.data.objects.new("probe_box", None)
+    box.empty_display_type = "CUBE"
+    box.location = (0.0, 0.0, 1.25)
+    box.scale = (1.0, 0.75, 0.5)
+    box["counts"] = [3, 2, 2]
+    bpy.context.scene.collection.objects.link(box)
+    blend = os.path.join(folder, "empty_scene.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=blend)
+    scan = os.path.join(folder, "room.xyz")
+    helpers.write_box_room_xyz(scan, 0.05)
+
+    missing = probe_scene.run_batch(blend, "import", "--scan", os.path.join(folder, "nope.xyz"))
+    assert missing.returncode == 2
+    _check(missing, "nope.xyz")
+
+    with_grid = os.path.join(folder, "with_grid.blend")
+    result = probe_scene.run_batch(blend, "import", "--scan", scan, "--grid-from", "probe_box",
+                                   "--resolution", "32", "--save-as", with_grid)
+    assert result.returncode == 0, result.stdout + result.stderr
+    _check(result, "imported", "grid 'probe_box': 3×2×2 probes at 32²", "saved")
+    result = probe_scene.run_batch(with_grid, "bake")
+    assert result.returncode == 0, result.stdout + result.stderr
+    manifest = json.load(open(os.path.join(folder, "probe_box_probes", "manifest.json")))
+    assert len(manifest["probes"]) == 12
+    result = probe_scene.run_batch(with_grid, "compare", "--reference-collection", "reference",
+                                   "--out", os.path.join(folder, "cmp"))
+    assert result.returncode == 0, result.stdout + result.stderr
+    _check(result, "PSNR")
+
+    fitted = os.path.join(folder, "fitted.blend")
+    result = probe_scene.run_batch(blend, "import", "--scan", scan, "--counts", "2", "2", "1",
+                                   "--resolution", "32", "--save-as", fitted)
+    assert result.returncode == 0, result.stdout + result.stderr
+    _check(result, "2×2×1 probes at 32²")
