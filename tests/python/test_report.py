@@ -14,7 +14,8 @@ from conftest import ROOT, report_scene_module, run_cli
 
 from lfprobe.core import metrics
 
-SECTIONS = ["definitions", "speed", "distance", "at_probe", "resolution", "images", "peers", "stability"]
+SECTIONS = ["definitions", "speed", "distance", "at_probe", "resolution", "images", "peers", "planning",
+            "stability"]
 
 
 @pytest.fixture(scope="module")
@@ -68,7 +69,8 @@ def test_sweep_rows_carry_speed_error_memory_and_bake_time(tiny_report):
             "bake_seconds", "pareto_front"} <= set(csv_rows[0])
     assert len(data["sweep_views"]) == len(rows) * len(data["scene"]["views"])
     for name in ("sweep_views.csv", "distance.csv", "walk.csv", "at_probe.csv", "peers.csv",
-                 "stability.csv", "ground_truth.csv"):
+                 "stability.csv", "ground_truth.csv", "planning_resolution.csv", "planning_walk.csv",
+                 "planning_iterations.csv"):
         assert (out / name).stat().st_size > 100, name
 
 
@@ -107,6 +109,59 @@ def test_distance_walk_peers_and_stability_are_measured(tiny_report):
         for kind in ("probes", "mesh_probes", "splats", "poisson"):
             assert f"triplet_{kind}_{view['name']}.png" in images
         assert f"confusion_{view['name']}.png" in images
+
+
+def test_planning_section_compares_auto_adaptive_and_bytes_per_probe(tiny_report):
+    from lfprobe.core.probe_set import PAPER_BYTES_PER_2048_PROBE
+
+    out, data, result = tiny_report
+    plan = data["planning"]
+    # a. auto against every fixed resolution of the preset (64², 128²), with the verdict's figures
+    rows = plan["resolution"]["rows"]
+    fixed = [r for r in rows if r["setting"].startswith("fixed")]
+    assert [r["resolution"] for r in fixed] == [64, 128]
+    auto = rows[-1]
+    assert auto["setting"].startswith("auto") and auto["probes"] == 12
+    for row in rows:
+        assert 0 < row["psnr"] < 100 and 0 <= row["flip"] <= 1 and 0 <= row["hole_rate"] <= 1
+        assert row["memory_bytes"] > 0 and row["bake_seconds"] > 0
+    assert all(64 <= n <= 4096 for n in auto["resolutions"])
+    r = plan["resolution"]
+    assert r["best_fixed"] == max(fixed, key=lambda x: x["psnr"])["setting"]
+    assert r["psnr_difference_db"] == pytest.approx(auto["psnr"] - r["best_fixed_psnr"])
+    assert r["memory_ratio"] == pytest.approx(auto["memory_bytes"] / r["best_fixed_memory_bytes"])
+    assert r["matches_best_error"] == (r["psnr_difference_db"] >= -0.1)
+    # b. adaptive placement against a uniform grid, per walk frame
+    placement = plan["placement"]
+    adaptive, uniform = placement["adaptive"], placement["uniform"]
+    iterations = adaptive["iterations"]
+    assert iterations[0]["probes"] == 2 and adaptive["probes"] == 2 + adaptive["added"]
+    assert iterations[-1]["mean_unknown_rate"] <= iterations[0]["mean_unknown_rate"]
+    assert adaptive["memory_bytes"] <= placement["budget_bytes"]
+    assert abs(uniform["probes"] - adaptive["probes"]) <= 1
+    frames = plan["placement_frames"]
+    walk = len(data["walk"])
+    for method in ("adaptive", "uniform grid"):
+        rows = [f for f in frames if f["method"] == method]
+        # the walk's frames, and the ones halfway between them that placement never saw
+        assert sum(f["placed_for"] for f in rows) == walk and len(rows) == 2 * walk - 1
+    for key in ("hole_rate", "psnr", "flip"):
+        assert adaptive[key] is not None and uniform[key] is not None
+        assert adaptive["between_frames"][key] is not None and uniform["between_frames"][key] is not None
+    assert placement["scene_grid"]["probes"] == 12 and placement["scene_grid"]["memory_bytes"] == placement["budget_bytes"]
+    assert placement["scene_grid"]["hole_rate"] == pytest.approx(sum(w["hole_rate"] for w in data["walk"]) / walk)
+    placed = [f for f in frames if f["method"] == "adaptive" and f["placed_for"]]
+    assert adaptive["hole_rate"] == pytest.approx(sum(f["hole_rate"] for f in placed) / walk)
+    # c. bytes per probe at equal error, against the paper's 24.375 MB
+    eq = plan["bytes_at_equal_error"]
+    assert eq["psnr"] >= eq["reference_psnr"]
+    assert eq["bytes_per_probe"] <= eq["reference_bytes_per_probe"]
+    assert eq["fraction_of_paper"] == pytest.approx(eq["bytes_per_probe"] / PAPER_BYTES_PER_2048_PROBE)
+    for sentence in data["findings"]["planning"]:
+        assert sentence in result.stdout
+    assert f"{r['auto_psnr']:.2f} dB" in data["findings"]["planning"][0]
+    images = set(os.listdir(out / "images"))
+    assert {"planning_walk_holes.png", "planning_walk_psnr.png"} <= images
 
 
 def test_findings_quote_the_measured_figures(tiny_report):

@@ -1,5 +1,6 @@
 """`lfprobe place` and the planning options of `lfprobe bake --auto`: per-probe resolution
-chosen from the data, probes inside geometry or against walls moved or dropped."""
+chosen from the data, probes inside geometry or against walls moved or dropped; with --views,
+probes added greedily where the given views trace UNKNOWN (lfprobe.core.adaptive)."""
 
 from __future__ import annotations
 
@@ -46,9 +47,89 @@ def plan_options(args, auto_resolution: bool = True) -> dict:
     }
 
 
+def read_view_cameras(paths) -> list:
+    """Camera JSON files (DESIGN.md §3) as dicts, with messages that name the file."""
+    cameras = []
+    for path in paths:
+        if not os.path.isfile(path):
+            raise FileNotFoundError(f"--views: no such camera file: {path}")
+        try:
+            with open(path, encoding="utf-8") as stream:
+                camera = json.load(stream)
+        except (json.JSONDecodeError, UnicodeDecodeError) as error:
+            raise ValueError(f"{path}: not a camera JSON file: {error}") from error
+        if not isinstance(camera, dict) or "matrix_world" not in camera or "resolution" not in camera:
+            raise ValueError(f"{path}: expected a camera object with matrix_world and resolution "
+                             "(write one with ./lfprobe camera)")
+        matrix = camera["matrix_world"]
+        if (not isinstance(matrix, list) or len(matrix) != 4
+                or any(not isinstance(r, list) or len(r) != 4 for r in matrix)):
+            raise ValueError(f"{path}: matrix_world: expected 4×4 rows of numbers")
+        cameras.append(camera)
+    return cameras
+
+
+def _cmd_place_adaptive(args) -> int:
+    """place --views: the base placement (if any), then probes at the eyes of the views that
+    trace the most UNKNOWN pixels until --target-unknown or --budget-mib is met."""
+    from .adaptive import budget_from_mib, place_adaptively
+    from .cli import _triples
+
+    if not args.out_probes:
+        raise ValueError("place --views bakes the probes it places: give --out-probes DIR")
+    if not 0.0 <= args.target_unknown <= 1.0:
+        raise ValueError(f"--target-unknown must be a fraction from 0 to 1, got {args.target_unknown}")
+    if args.res < 8 or args.res > 8192:
+        raise ValueError(f"--res must be from 8 to 8192, got {args.res}")
+    budget = budget_from_mib(args.budget_mib)
+    cameras = read_view_cameras(args.views)
+    positions = _triples(args.probe, "--probe")
+    grid = [args.grid_min, args.grid_max, args.counts]
+    base_grid = None
+    if any(g is not None for g in grid):
+        ProbePlacementSpec(positions=positions, grid_min=args.grid_min, grid_max=args.grid_max,
+                           counts=args.counts).validate()
+        base_grid = {"min": list(args.grid_min), "max": list(args.grid_max), "counts": list(args.counts)}
+    progress = None if args.quiet else TerminalProgress()
+    cloud = load_scans(args.scan, _triples(args.scanner, "--scanner"), args.columns or "",
+                       "" if args.no_cache else args.cache, progress=progress)
+    result = place_adaptively(
+        cloud, cameras, args.out_probes, base_positions=positions, base_grid=base_grid,
+        resolution=args.res, plan=plan_options(args) if args.auto else None,
+        target_unknown=args.target_unknown, budget_bytes=budget, max_added=args.max_added,
+        threads=args.threads, log=None if args.quiet else print)
+    data = {"scans": [os.path.abspath(p) for p in args.scan], "points": len(cloud),
+            "views": [os.path.abspath(p) for p in args.views], **result.as_dict()}
+    if args.out:
+        tmp = args.out + ".tmp"
+        with open(tmp, "w", encoding="utf-8") as f:
+            json.dump(data, f, indent=2)
+        os.replace(tmp, args.out)
+    if args.json:
+        print(json.dumps(data, indent=2))
+        return 0
+    first, last = result.iterations[0], result.iterations[-1]
+    print(f"added {len(result.added)} probe(s) to {result.base_probes} base probe(s); stopped: "
+          f"{result.stopped_because}")
+    print(f"  UNKNOWN rate over {len(cameras)} view(s): mean {first['mean_unknown_rate']:.2%} → "
+          f"{last['mean_unknown_rate']:.2%}, worst {first['max_unknown_rate']:.2%} → "
+          f"{last['max_unknown_rate']:.2%}; memory {last['memory_bytes'] / 2**20:.2f} MiB")
+    for added in result.added:
+        x, y, z = added["position"]
+        print(f"  + ({x:.3f}, {y:.3f}, {z:.3f}) at the eye of {args.views[added['view']]} "
+              f"(was {added['unknown_rate_before']:.2%} UNKNOWN), {added['resolution']}²")
+    print(f"probe set: {result.folder}")
+    return 0
+
+
 def _cmd_place(args) -> int:
     from .cli import _triples  # the CLI's own X Y Z parsing
 
+    if args.views:
+        return _cmd_place_adaptive(args)
+    for option, value in (("--out-probes", args.out_probes), ("--budget-mib", args.budget_mib)):
+        if value is not None:
+            raise ValueError(f"{option} is for adaptive placement: give --views CAM.json too")
     placement = ProbePlacementSpec(positions=_triples(args.probe, "--probe"),
                                    grid_min=args.grid_min, grid_max=args.grid_max,
                                    counts=args.counts)
@@ -84,7 +165,15 @@ def _cmd_place(args) -> int:
 
 
 def add_parsers(sub) -> None:
-    place = sub.add_parser("place", help="plan probes from the data: resolution, class, moves, drops")
+    place = sub.add_parser(
+        "place", help="plan probes from the data: resolution, class, moves, drops; with --views, "
+                      "add probes where views trace UNKNOWN",
+        description="Plans probes from the data (resolution, class, moves, drops). With --views, "
+                    "places probes adaptively instead: the base probes (--probe or a grid; may be "
+                    "left out) are baked, every view is traced, and a probe is added at the eye of "
+                    "the view with the most UNKNOWN pixels, again and again, until every view is at "
+                    "most --target-unknown UNKNOWN or the next probe would exceed --budget-mib; the "
+                    "probe set goes to --out-probes.")
     place.add_argument("--scan", nargs="+", required=True, metavar="FILE")
     place.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X",
                        help="scanner positions X Y Z, one per scan file (world coordinates)")
@@ -99,5 +188,21 @@ def add_parsers(sub) -> None:
     place.add_argument("--out", metavar="PLAN.json", help="also write the plan as JSON")
     place.add_argument("--json", action="store_true", help="print the plan as JSON")
     place.add_argument("--quiet", action="store_true")
+    adaptive = place.add_argument_group("adaptive placement (--views)")
+    adaptive.add_argument("--views", nargs="+", metavar="CAM.json",
+                          help="camera files of the views or camera path to serve (./lfprobe camera "
+                               "writes them); turns on adaptive placement")
+    adaptive.add_argument("--target-unknown", type=float, default=0.01, metavar="F",
+                          help="stop when every view has at most this fraction of UNKNOWN pixels "
+                               "(default 0.01)")
+    adaptive.add_argument("--budget-mib", type=float, default=None, metavar="M",
+                          help="memory budget of the whole set, loaded maps and coarse levels (MiB); "
+                               "no probe is added that would exceed it")
+    adaptive.add_argument("--out-probes", metavar="DIR", help="the probe set written (base + added)")
+    adaptive.add_argument("--res", type=int, default=256, help="resolution of every probe (default 256)")
+    adaptive.add_argument("--auto", action="store_true",
+                          help="plan each probe from the data instead (the planning options below)")
+    adaptive.add_argument("--max-added", type=int, default=64, help="most probes added (default 64)")
+    adaptive.add_argument("--threads", type=int, default=0, help="render threads (0: every core)")
     add_plan_arguments(place)
     place.set_defaults(run=_cmd_place)

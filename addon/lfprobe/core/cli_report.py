@@ -20,7 +20,7 @@ def _cmd_report(args) -> int:
     failed = [c["case"] for c in data["stability"] if c["passed"] is False]
     print(f"report: {args.out}/report.html ({len(data['sweep'])} settings, {len(data['sweep_views'])} "
           f"measured views, {data['seconds']:.1f} s)")
-    for key in ("at_probe", "distance", "resolution", "speed", "peers"):
+    for key in ("at_probe", "distance", "resolution", "speed", "peers", "planning"):
         for sentence in data["findings"].get(key, []):
             print(f"  {sentence}")
     if failed:

@@ -170,3 +170,24 @@ def bar_peers(rows: Sequence[Dict[str, object]], key: str, ylabel: str, title: s
     axes.set_title(title, fontsize=10)
     axes.grid(True, axis="y", alpha=0.3)
     return _png(figure)
+
+
+def walk_by_method(rows: Sequence[Dict[str, object]], key: str, ylabel: str,
+                   xlabel: str = "walk frame") -> Optional[bytes]:
+    """One line per placement method over the walk's frames (report section "planning")."""
+    series: Dict[str, List[tuple]] = {}
+    for r in rows:
+        if _finite(r.get(key)):
+            series.setdefault(r["method"], []).append((r["frame"], r[key]))
+    if not series:
+        return None
+    frames = sorted({f for pts in series.values() for f, _ in pts})
+    figure, axes = plt.subplots(figsize=(7.0, 3.6))
+    for method, pts in series.items():
+        axes.plot([frames.index(f) for f, _ in pts], [v for _, v in pts], marker="o", markersize=4, label=method)
+    axes.set_xlabel(xlabel)
+    axes.set_ylabel(ylabel)
+    axes.set_title(f"{ylabel.split(' (')[0]} along the walk", fontsize=10)
+    axes.grid(True, alpha=0.3)
+    axes.legend(fontsize=8)
+    return _png(figure)

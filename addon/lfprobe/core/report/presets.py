@@ -43,6 +43,12 @@ class Preset:
     poisson_depth: int
     stability_resolution: int
     bake_variants: List[str] = field(default_factory=lambda: list(BAKE_VARIANTS))
+    # Adaptive placement (report section "Model only what a scene needs"): the base grid is the
+    # scene grid's counts × this factor; probes are added at walk eyes up to this many, until
+    # every frame is at most planning_target_unknown UNKNOWN or the scene grid's memory is spent.
+    planning_base_factor: float = 0.5
+    planning_target_unknown: float = 0.01
+    planning_max_added: int = 12
 
 
 PRESETS = {
@@ -50,7 +56,7 @@ PRESETS = {
                    min_scan_step_deg=1.0, fine_resolutions=[64, 128], count_factors=[1.0],
                    trace_variants=TRACE_VARIANTS[:2], mesh_resolutions=[64, 128, 256],
                    distance_fractions=[0.0, 0.1, 0.3, 0.6, 1.0], timing_repeats=1,
-                   poisson_depth=6, stability_resolution=64),
+                   poisson_depth=6, stability_resolution=64, planning_max_added=3),
     "demo": Preset("demo", max_view_width=256, gt_spp=16, scan_step_factors=[4.0, 8.0],
                    min_scan_step_deg=0.25, fine_resolutions=[256, 512, 1024],
                    count_factors=[0.5, 1.0], trace_variants=TRACE_VARIANTS,
@@ -62,7 +68,8 @@ PRESETS = {
                    count_factors=[0.5, 1.0, 2.0], trace_variants=TRACE_VARIANTS,
                    mesh_resolutions=[256, 512, 1024, 2048, 4096],
                    distance_fractions=[0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0],
-                   timing_repeats=5, poisson_depth=9, stability_resolution=512),
+                   timing_repeats=5, poisson_depth=9, stability_resolution=512,
+                   planning_max_added=24),
 }
 
 

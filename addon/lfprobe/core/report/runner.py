@@ -11,7 +11,7 @@ import time
 from typing import Callable, Dict, List, Optional, Sequence
 
 from .. import metrics
-from . import files, html, images, peers, plots, stability
+from . import files, html, images, peers, planning, plots, stability
 from .html import num, table, text
 from .measure import RunContext, stderr_log
 from .presets import DEFAULT_TRACE, get_preset
@@ -49,7 +49,10 @@ def run_report(scene_path: str, out_dir: str, preset_name: str = "demo", threads
         splat_rows, splat_images = peers.splat_rows(ctx, densest)
         poisson_rows, poisson_images, poisson_info = peers.poisson_rows(ctx, densest)
         stability_cases = stability.run(ctx)
+        planning_data = planning.run(ctx, sweep)
         data = _report_data(ctx, sweep, splat_rows, poisson_rows, poisson_info, stability_cases)
+        data["planning"] = planning_data
+        data["findings"]["planning"] = planning.findings(planning_data)
         data["started"] = started.isoformat(timespec="seconds")
         data["seconds"] = time.perf_counter() - start
         pngs = _write_images(ctx, sweep, data, splat_images, poisson_images)
@@ -188,6 +191,11 @@ def _write_tables(out_dir: str, data: Dict[str, object]) -> None:
     files.write_csv(os.path.join(out_dir, "peers.csv"), without(data["peers"]["rows"], "confusion"))
     files.write_csv(os.path.join(out_dir, "stability.csv"), without(data["stability"], "series"))
     files.write_csv(os.path.join(out_dir, "ground_truth.csv"), data["ground_truth"])
+    plan = data["planning"]
+    files.write_csv(os.path.join(out_dir, "planning_resolution.csv"), plan["resolution"]["rows"])
+    files.write_csv(os.path.join(out_dir, "planning_walk.csv"), plan["placement_frames"])
+    files.write_csv(os.path.join(out_dir, "planning_iterations.csv"),
+                    without(plan["placement"]["adaptive"]["iterations"], "unknown_rate_per_view"))
 
 
 def _write_images(ctx: RunContext, sweep: Sweep, data, splat_images, poisson_images) -> Dict[str, bytes]:
@@ -215,6 +223,10 @@ def _write_images(ctx: RunContext, sweep: Sweep, data, splat_images, poisson_ima
     keep("peers_ms.png", plots.bar_peers(peer_rows, "ms_per_frame", "time per frame [ms], log scale",
                                          "render time per frame, same camera", log=True))
     keep("peers_psnr.png", plots.bar_peers(peer_rows, "psnr", "PSNR (sRGB) [dB]", "error against the ground truth"))
+    frames = data["planning"]["placement_frames"]
+    walk_axis = "position along the walk (even: a frame placement served; odd: halfway between two)"
+    keep("planning_walk_holes.png", plots.walk_by_method(frames, "hole_rate", "hole rate (GT hit, probes not HIT)", walk_axis))
+    keep("planning_walk_psnr.png", plots.walk_by_method(frames, "psnr", "PSNR (sRGB) [dB]", walk_axis))
     for label, source in (("probes", sweep.reference_images), ("mesh_probes", sweep.mesh_triplets),
                           ("splats", splat_images), ("poisson", poisson_images)):
         for view, (gt, test, error_map, row) in source.items():
@@ -366,6 +378,8 @@ def _page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
         img(f"triplet_splats_{view}.png", f"view '{view}': ground truth | splats | FLIP error", None, True)
         img(f"triplet_poisson_{view}.png", f"view '{view}': ground truth | Poisson mesh | FLIP error", None, True)
 
+    _planning_section(page, data, img)
+
     page.section("stability", "Numerical stability")
     page.paragraph("The hard cases, run on this scene with probes baked from its mesh; each is judged by the "
                    "stated criterion.", "note")
@@ -384,8 +398,68 @@ def _page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
                                             ("status_differs", "pixels changing status", num(".3%")),
                                             ("psnr_vs_lookup", "PSNR dB vs lookup", num(".2f"))]))
     page.paragraph("Raw figures: report.json, sweep.csv, sweep_views.csv, distance.csv, walk.csv, at_probe.csv, "
-                   "peers.csv, stability.csv, ground_truth.csv beside this file; images in images/.", "note")
+                   "peers.csv, stability.csv, ground_truth.csv, planning_resolution.csv, planning_walk.csv, "
+                   "planning_iterations.csv beside this file; images in images/.", "note")
     return page.render()
+
+
+def _planning_section(page, data: Dict[str, object], img) -> None:
+    plan = data["planning"]
+    r, pl, eq = plan["resolution"], plan["placement"], plan["bytes_at_equal_error"]
+    page.section("planning", "Model only what a scene needs")
+    page.paragraph("Automatic resolution: the scene grid baked from the densest scan with bake --auto (each probe "
+                   "at the resolution its points support, N ≈ sqrt(4π)·r/s, between 64² and 4096²; probes inside "
+                   "geometry or against walls moved or dropped) against the same grid at every fixed resolution "
+                   "of the sweep (lfprobe's splat + fill bake, default trace), errors averaged over the views. "
+                   f"Criterion: {r['criterion']}.", "note")
+    for sentence in data["findings"].get("planning", []):
+        page.paragraph(sentence, "finding")
+    page.add(table(r["rows"], [("setting", "setting", text), ("resolution_summary", "N² × probes", text),
+                               ("probes", "probes", num(".0f")), ("psnr", "PSNR dB", num(".2f")),
+                               ("ssim", "SSIM", num(".4f")), ("flip", "FLIP", num(".4f")),
+                               ("hole_rate", "holes", num(".2%")), ("unknown_rate", "UNKNOWN", num(".2%")),
+                               ("memory_bytes_per_probe", "MiB/probe", num(".3f", 1 / MIB)),
+                               ("memory_bytes", "MiB total", num(".2f", 1 / MIB)),
+                               ("bake_seconds", "bake s", num(".2f"))]))
+    a, u = pl["adaptive"], pl["uniform"]
+    page.add("<h3>Adaptive placement against a uniform grid along the walk</h3>")
+    page.paragraph(f"Adaptive: a base grid of {pl['base_counts']} probes, then greedily a probe at the eye of the "
+                   f"walk frame with the most UNKNOWN pixels (the paper's simulated probes), until every frame is at "
+                   f"most {pl['target_unknown']:.1%} UNKNOWN, {data['preset']}'s limit of added probes, or the memory of "
+                   f"the scene grid at {pl['resolution']}² ({pl['budget_bytes'] / MIB:.2f} MiB) is reached. The added "
+                   "probes turn the grid into a set of positions traced nearest first. Uniform: a grid over the scene "
+                   "grid's box with the probe count nearest the adaptive set's (fewer on a tie; the most even "
+                   "spacing among those), so the same memory as far as the counts allow. Every probe is "
+                   f"{pl['resolution']}², from the densest scan. The walk frames are the views the adaptive probes "
+                   "were placed for (the table's means); the frames halfway between them, which placement never "
+                   "saw, are measured apart (\"between\" rows below and placed_for = false in planning_walk.csv).",
+                   "note")
+    summary_rows = [dict(a, method="adaptive", layout=f"{pl['base_counts']} + {a['added']}"),
+                    dict(u, method="uniform grid", layout=str(u["counts"]))]
+    summary_rows += [dict(r, **r["between_frames"], method=f"{r['method']}, between frames")
+                     for r in summary_rows if r.get("between_frames")]
+    if pl.get("scene_grid"):
+        summary_rows.append(dict(pl["scene_grid"], method="scene grid (whole budget)",
+                                 layout=str(pl["scene_grid"]["counts"])))
+    page.add(table(summary_rows,
+                   [("method", "method", text), ("layout", "probes", text), ("probes", "count", num(".0f")),
+                    ("memory_bytes", "MiB", num(".2f", 1 / MIB)), ("hole_rate", "holes", num(".2%")),
+                    ("unknown_rate", "UNKNOWN", num(".2%")), ("psnr", "PSNR dB", num(".2f")),
+                    ("ssim", "SSIM", num(".4f")), ("flip", "FLIP", num(".4f")),
+                    ("ms_per_frame", "ms/frame", num(".2f")), ("bake_seconds", "bake s", num(".2f"))]))
+    img("planning_walk_holes.png", "hole rate per walk frame: adaptive placement and the uniform grid", 520)
+    img("planning_walk_psnr.png", "PSNR [dB] per walk frame: adaptive placement and the uniform grid", 520)
+    page.add(table(plan["placement_frames"], [("method", "method", text), ("frame", "frame", text),
+                                              ("placed_for", "placed for", text),
+                                              ("distance_to_nearest_probe", "distance m", num(".3f")),
+                                              ("ms_per_frame", "ms/frame", num(".2f")), *METRIC_COLUMNS,
+                                              ("unknown_rate", "UNKNOWN", num(".2%"))]))
+    page.add("<h3>Bytes per probe at equal error</h3>")
+    page.paragraph(f"Reference: {eq['reference_setting']} (the largest fixed resolution), mean PSNR "
+                   f"{eq['reference_psnr']:.2f} dB. Among the {eq['candidates']} scan-baked settings of the sweep "
+                   "(default trace) and auto, the smallest memory per probe (loaded maps and coarse levels) that "
+                   f"reaches that PSNR: {eq['setting']}, {eq['bytes_per_probe'] / MIB:.3f} MiB per probe = "
+                   f"{eq['fraction_of_paper']:.2%} of the paper's 24.375 MB per 2048² probe.", "note")
 
 
 def _short(value) -> str:

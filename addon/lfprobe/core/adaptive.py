@@ -1,0 +1,246 @@
+"""Adaptive probe placement: probes where views need them (the paper's simulated probes).
+
+A base placement (a grid, explicit positions, or nothing) is baked once; then, greedily, the
+view with the most UNKNOWN pixels gets a probe at its eye, until every view's UNKNOWN rate is
+at most a target or the next probe would not fit a memory budget. Each iteration bakes only
+the new probe (a one-probe set) and merges it into the growing set by rewriting the manifest
+with layout "positions", so the cost of an iteration is one probe's bake and one render per
+view. Without ground truth, a hole is what the trace itself reports: an UNKNOWN pixel.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+from dataclasses import dataclass, field
+from typing import Callable, Dict, List, Optional, Sequence
+
+import numpy as np
+
+from . import native
+from .probe_set import MANIFEST, coarse_level_bytes, read_manifest
+
+UNKNOWN = 2  # the render's status channel: 0 MISS, 1 HIT, 2 UNKNOWN
+DEFAULT_TRACE = {"mode": "auto", "thickness": 0.02}
+Log = Optional[Callable[[str], object]]
+
+
+@dataclass
+class AdaptiveResult:
+    """What the greedy loop did: the probes it added (world positions), one record per
+    iteration (probes, memory, UNKNOWN rate per view) and why it stopped."""
+    folder: str
+    base_probes: int
+    added: List[Dict[str, object]] = field(default_factory=list)
+    iterations: List[Dict[str, object]] = field(default_factory=list)
+    stopped_because: str = ""
+    memory_bytes: int = 0
+    bake_seconds: float = 0.0
+
+    @property
+    def added_positions(self) -> List[List[float]]:
+        return [a["position"] for a in self.added]
+
+    def as_dict(self) -> Dict[str, object]:
+        return {"folder": self.folder, "base_probes": self.base_probes, "added": self.added,
+                "iterations": self.iterations, "stopped_because": self.stopped_because,
+                "memory_bytes": self.memory_bytes, "bake_seconds": self.bake_seconds}
+
+
+def camera_position(camera: dict) -> List[float]:
+    """The eye of a camera dict (the translation column of matrix_world)."""
+    try:
+        m = camera["matrix_world"]
+        return [float(m[0][3]), float(m[1][3]), float(m[2][3])]
+    except (KeyError, IndexError, TypeError) as error:
+        raise ValueError(f"camera: expected matrix_world as 4×4 rows ({error})") from error
+
+
+def probe_memory_bytes(record: dict) -> int:
+    """Loaded bytes of one manifest probe record: its maps and the coarse levels derived on load
+    (as lfprobe.core.probe_set.summarize counts them)."""
+    return int(record.get("memory_bytes", 0)) + coarse_level_bytes(int(record["resolution"]))
+
+
+def unknown_rate(image: dict) -> float:
+    status = np.asarray(image["status"])
+    return float(np.count_nonzero(status == UNKNOWN)) / status.size if status.size else 0.0
+
+
+def _write_manifest(folder: str, manifest: dict) -> None:
+    path = os.path.join(folder, MANIFEST)
+    tmp = path + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as stream:
+        json.dump(manifest, stream, indent=2, sort_keys=True)
+    os.replace(tmp, path)
+
+
+class _GrowingSet:
+    """A probe set folder that probes are appended to (layout "positions")."""
+
+    def __init__(self, folder: str, manifest: Optional[dict]):
+        self.folder = folder
+        self.manifest = manifest
+
+    @property
+    def probes(self) -> List[dict]:
+        return [] if self.manifest is None else self.manifest["probes"]
+
+    def memory_bytes(self) -> int:
+        return sum(probe_memory_bytes(p) for p in self.probes)
+
+    def append(self, one_probe_folder: str, note: dict) -> None:
+        """Moves the single probe of `one_probe_folder` into this set and rewrites the manifest."""
+        added = read_manifest(one_probe_folder)
+        record = dict(added["probes"][0])
+        name = f"probe_{len(self.probes):05d}.exr"
+        # A rename within one file system: the EXR appears whole; the manifest that lists it comes last.
+        os.replace(os.path.join(one_probe_folder, record["file"]), os.path.join(self.folder, name))
+        record["file"] = name
+        if self.manifest is None:
+            self.manifest = dict(added, probes=[], layout="positions")
+            self.manifest.pop("grid", None)
+            self.manifest["bake"] = dict(added.get("bake", {}), adaptive=[])
+        elif [round(a, 9) for a in added["world_offset"]] != [round(a, 9) for a in self.manifest["world_offset"]]:
+            raise ValueError(f"{one_probe_folder}: world offset {added['world_offset']} differs from the set's "
+                             f"{self.manifest['world_offset']}")
+        if self.manifest.get("layout") != "positions":
+            # A grid with one more probe is no longer a grid: the trace tries probes nearest first.
+            self.manifest["layout"] = "positions"
+            self.manifest.pop("grid", None)
+        self.manifest["probes"].append(record)
+        self.manifest.setdefault("bake", {}).setdefault("adaptive", []).append(
+            dict(note, file=name, resolution=record["resolution"], bake=added.get("bake", {}).get("plan")))
+        _write_manifest(self.folder, self.manifest)
+
+
+def place_adaptively(
+    cloud,
+    cameras: Sequence[dict],
+    folder: str,
+    base_positions: Sequence[Sequence[float]] = (),
+    base_grid: Optional[Dict[str, Sequence]] = None,
+    resolution: int = 256,
+    plan: Optional[dict] = None,
+    target_unknown: float = 0.01,
+    budget_bytes: Optional[float] = None,
+    max_added: int = 64,
+    trace: Optional[dict] = None,
+    threads: int = 0,
+    splat_scale: float = 0.8,
+    hole_fill_texels: int = 4,
+    log: Log = None,
+) -> AdaptiveResult:
+    """Greedy placement into `folder` (a probe set that ends up holding the base and the added
+    probes). cameras: camera dicts (DESIGN.md §3, world coordinates). base_grid: {"min", "max",
+    "counts"}, or base_positions (world), or neither. resolution: the new probes' N, or with
+    `plan` (options of start_bake_planned_probe_set) each new probe is planned from the data.
+    Stops when every view's UNKNOWN rate is ≤ target_unknown, when the next probe would take the
+    set over budget_bytes (loaded maps and coarse levels), after max_added probes, or when every
+    view that is still above the target already has a probe at its eye."""
+    _native = native.load()
+    if not cameras:
+        raise ValueError("adaptive placement needs at least one view (camera)")
+    if not 0.0 <= target_unknown <= 1.0:
+        raise ValueError(f"target UNKNOWN rate must be between 0 and 1, got {target_unknown}")
+    if budget_bytes is not None and budget_bytes <= 0:
+        raise ValueError(f"memory budget must be positive, got {budget_bytes} bytes")
+    if base_grid is not None and base_positions:
+        raise ValueError("give a base grid or base positions, not both")
+    trace = dict(DEFAULT_TRACE if trace is None else trace)
+    texts = [json.dumps(c) for c in cameras]
+    eyes = [camera_position(c) for c in cameras]
+    if os.path.exists(folder):
+        shutil.rmtree(folder)
+    os.makedirs(folder)
+    work = folder.rstrip(os.sep) + ".adding"
+    bake_kwargs = dict(splat_scale=splat_scale, hole_fill_texels=hole_fill_texels)
+
+    def bake_into(target: str, positions=(), grid=None) -> dict:
+        grid = grid or {}
+        if plan is not None:
+            options = {"resolution": int(resolution), **bake_kwargs, **plan}
+            return _native.start_bake_planned_probe_set(
+                cloud, target, positions=[list(map(float, p)) for p in positions],
+                grid_min=grid.get("min"), grid_max=grid.get("max"), counts=grid.get("counts"),
+                options=options).run()
+        return _native.start_bake_probe_set(
+            cloud, target, resolution=int(resolution), positions=[list(map(float, p)) for p in positions],
+            grid_min=grid.get("min"), grid_max=grid.get("max"), counts=grid.get("counts"), **bake_kwargs).run()
+
+    result = AdaptiveResult(folder=os.path.abspath(folder), base_probes=0)
+    if base_grid is not None or base_positions:
+        summary = bake_into(folder, base_positions, base_grid)
+        result.bake_seconds += summary["bake_seconds"] + summary.get("normals_seconds", 0.0)
+        grown = _GrowingSet(folder, read_manifest(folder))
+        result.base_probes = len(grown.probes)
+    else:
+        grown = _GrowingSet(folder, None)
+    try:
+        while True:
+            field_ = _native.ProbeField.load(folder) if grown.probes else None
+            rates, unknown_pixels, seconds = [], [], 0.0
+            for text, camera in zip(texts, cameras):
+                if field_ is None:  # nothing baked yet: every pixel is unknown
+                    w, h = camera["resolution"]
+                    rates.append(1.0)
+                    unknown_pixels.append(int(w) * int(h))
+                    continue
+                image, stats = field_.render(text, threads=threads, **trace)
+                seconds += stats["seconds"]
+                rates.append(unknown_rate(image))
+                unknown_pixels.append(int(np.count_nonzero(np.asarray(image["status"]) == UNKNOWN)))
+            memory = grown.memory_bytes()
+            result.iterations.append({
+                "iteration": len(result.iterations), "probes": len(grown.probes), "memory_bytes": memory,
+                "unknown_rate_per_view": rates, "mean_unknown_rate": sum(rates) / len(rates),
+                "max_unknown_rate": max(rates), "render_seconds": seconds})
+            result.memory_bytes = memory
+            if log:
+                log(f"  adaptive: {len(grown.probes)} probe(s), {memory / 2**20:.2f} MiB, UNKNOWN mean "
+                    f"{100 * sum(rates) / len(rates):.2f} %, worst {100 * max(rates):.2f} %")
+            del field_
+            if max(rates) <= target_unknown:
+                result.stopped_because = f"every view at most {target_unknown:.2%} UNKNOWN"
+                break
+            if len(result.added) >= max_added:
+                result.stopped_because = f"{max_added} probes added (the limit)"
+                break
+            # The worst view whose eye has no probe yet: a probe at an eye that already has one
+            # would change nothing.
+            order = sorted(range(len(cameras)), key=lambda i: -unknown_pixels[i])
+            worst = next((i for i in order if rates[i] > target_unknown
+                          and not any(math.dist(eyes[i], a["eye"]) < 1e-6 for a in result.added)), None)
+            if worst is None:
+                result.stopped_because = "every view above the target already has a probe at its eye"
+                break
+            if os.path.exists(work):
+                shutil.rmtree(work)
+            summary = bake_into(work, [eyes[worst]])
+            candidate_set = read_manifest(work)
+            candidate = candidate_set["probes"][0]
+            cost = probe_memory_bytes(candidate)
+            if budget_bytes is not None and memory + cost > budget_bytes:
+                result.stopped_because = (f"the next probe ({cost / 2**20:.2f} MiB) would exceed the budget "
+                                          f"({budget_bytes / 2**20:.2f} MiB; {memory / 2**20:.2f} MiB used)")
+                break
+            result.bake_seconds += summary["bake_seconds"] + summary.get("normals_seconds", 0.0)
+            # A planned probe may have been moved off a wall: record where it went (world).
+            position = [o + c for o, c in zip(candidate_set["world_offset"], candidate["position"])]
+            note = {"iteration": len(result.iterations) - 1, "view": worst, "eye": eyes[worst],
+                    "position": position, "unknown_rate_before": rates[worst]}
+            grown.append(work, note)
+            result.added.append({**note, "resolution": candidate["resolution"], "memory_bytes": cost})
+    finally:
+        shutil.rmtree(work, ignore_errors=True)
+    return result
+
+
+def budget_from_mib(mib: Optional[float]) -> Optional[float]:
+    if mib is None:
+        return None
+    if not math.isfinite(mib) or mib <= 0:
+        raise ValueError(f"--budget-mib must be a positive number of MiB, got {mib}")
+    return mib * 1024.0 * 1024.0
