@@ -309,13 +309,7 @@ void bind_mesh(py::module_& m) {
                 const MeshHandle h = resolve(mesh);
                 r = on_threads(threads, [&] { return embree_throughput(*h->scene, cam, repeats); });
             }
-            py::dict d;
-            d["rays"] = r.rays;
-            d["hits"] = r.hits;
-            d["seconds"] = r.seconds;
-            d["rays_per_second"] = r.rays_per_second;
-            d["repeats"] = r.repeats;
-            return d;
+            return throughput_dict(r);
         },
         py::arg("mesh"), py::arg("camera"), py::arg("threads") = 0, py::arg("repeats") = 3,
         "Embree primary rays per second on the camera's pixel-centre rays (trace only, fastest of "

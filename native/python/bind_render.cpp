@@ -97,14 +97,22 @@ void bind_render(py::module_& m) {
         m, "ProbeField", "A loaded probe set: maps and coarse levels, ready to trace.")
         .def_static(
             "load",
-            [](const std::string& folder, int coarse_resolution) {
+            [](const std::string& folder, int coarse_resolution, const py::object& storage,
+               double distance_step) {
+                const std::optional<ProbeStorage> chosen = storage_from(storage, distance_step);
                 py::gil_scoped_release release;
                 return std::make_shared<ProbeField>(
-                    ProbeField::load(folder, nullptr, coarse_resolution));
+                    ProbeField::load(folder, nullptr, coarse_resolution, chosen));
             },
-            py::arg("folder"), py::arg("coarse_resolution") = 0,
+            py::arg("folder"), py::arg("coarse_resolution") = 0, py::arg("storage") = py::none(),
+            py::arg("distance_step") = 0.0,
             "Load a probe set; coarse_resolution is the size of the coarsest min-distance level "
-            "kept (0: every level down to 1x1).")
+            "kept (0: every level down to 1x1). storage: how the probes are held in memory: "
+            "None (as the manifest says), \"full\", \"compact\" (8-bit sRGB radiance, 16-bit "
+            "distance in steps of distance_step metres, default 1 mm, 8+8-bit octahedral normals, "
+            "no confidence) or a dict like the manifest's \"storage\".")
+        .def_property_readonly("storage",
+                               [](const ProbeField& f) { return storage_dict(f.storage()); })
         .def_property_readonly("probe_count", &ProbeField::probe_count)
         .def_property_readonly("is_grid", &ProbeField::is_grid)
         .def_property_readonly("memory_bytes", &ProbeField::memory_bytes)
@@ -127,13 +135,7 @@ void bind_render(py::module_& m) {
                         return probe_trace_throughput(*field, cam, settings, repeats);
                     });
                 }
-                py::dict d;
-                d["rays"] = r.rays;
-                d["hits"] = r.hits;
-                d["seconds"] = r.seconds;
-                d["rays_per_second"] = r.rays_per_second;
-                d["repeats"] = r.repeats;
-                return d;
+                return throughput_dict(r);
             },
             py::arg("camera"), py::arg("mode") = "auto", py::arg("threads") = 0,
             py::arg("repeats") = 3,
@@ -203,14 +205,16 @@ void bind_render(py::module_& m) {
     m.def(
         "start_render",
         [](const std::string& folder, const std::string& camera, const std::string& output,
-           const std::string& mode, int threads, double thickness, bool use_coarse_levels) {
+           const std::string& mode, int threads, double thickness, bool use_coarse_levels,
+           const py::object& storage, double distance_step) {
             const Camera cam = camera_from(camera);
             const RenderSettings settings = render_settings(mode, thickness, use_coarse_levels, 32);
+            const std::optional<ProbeStorage> chosen = storage_from(storage, distance_step);
             return std::make_unique<Job>(
                 std::function<RenderStats(Progress&)>([=](Progress& progress) {
                     return on_threads(threads, [&] {
                         progress.begin_stage("loading probes", 1);
-                        const ProbeField field = ProbeField::load(folder, &progress);
+                        const ProbeField field = ProbeField::load(folder, &progress, 0, chosen);
                         RenderStats stats;
                         const RenderedImage image =
                             render_probe_view(field, cam, settings, &progress, &stats);
@@ -219,6 +223,8 @@ void bind_render(py::module_& m) {
                             nlohmann::json{{"probes", folder},
                                            {"camera", cam.to_json()},
                                            {"settings", render_settings_json(settings)},
+                                           {"storage", field.storage().to_json()},
+                                           {"memory_bytes", field.memory_bytes()},
                                            {"stats", stats.to_json()}}
                                 .dump());
                         return stats;
@@ -229,9 +235,10 @@ void bind_render(py::module_& m) {
         },
         py::arg("folder"), py::arg("camera"), py::arg("output"), py::arg("mode") = "auto",
         py::arg("threads") = 0, py::arg("thickness") = TraceSettings{}.thickness,
-        py::arg("use_coarse_levels") = true,
+        py::arg("use_coarse_levels") = true, py::arg("storage") = py::none(),
+        py::arg("distance_step") = 0.0,
         "Start rendering the probe set in `folder` from `camera` (JSON path or text) into the EXR "
-        "`output`; the Job's result is the stats dict.");
+        "`output`; the Job's result is the stats dict. storage as for ProbeField.load.");
 
     m.def(
         "start_splat",

@@ -17,6 +17,8 @@
 #include "lfprobe/probe_map.hpp"
 #include "lfprobe/probe_placement.hpp"
 #include "lfprobe/probe_set.hpp"
+#include "lfprobe/probe_storage.hpp"
+#include "lfprobe/throughput.hpp"
 
 namespace lfprobe::python {
 
@@ -93,6 +95,44 @@ inline nlohmann::json sources_from(const std::string& sources_json) {
     } catch (const nlohmann::json::exception& e) {
         throw InputError(std::string("bake: sources_json is not valid JSON (") + e.what() + ")");
     }
+}
+
+// A storage from Python: None (none chosen), "full", "compact" (with `step` metres, the
+// default step when 0) or a dict as the manifest writes it.
+inline std::optional<ProbeStorage> storage_from(const pybind11::object& storage,
+                                                double step = 0.0) {
+    if (storage.is_none()) {
+        return std::nullopt;
+    }
+    if (pybind11::isinstance<pybind11::str>(storage)) {
+        return ProbeStorage::from_name(storage.cast<std::string>(), step);
+    }
+    if (pybind11::isinstance<pybind11::dict>(storage)) {
+        const std::string text =
+            pybind11::module_::import("json").attr("dumps")(storage).cast<std::string>();
+        return ProbeStorage::from_json(nlohmann::json::parse(text), "storage");
+    }
+    throw InputError("storage: expected None, \"full\", \"compact\" or a dict");
+}
+
+inline pybind11::dict storage_dict(const ProbeStorage& storage) {
+    pybind11::dict d;
+    d["radiance"] = storage.radiance == RadiancePrecision::Srgb8 ? "srgb8" : "half";
+    d["normal"] = storage.normal == NormalPrecision::Oct16 ? "oct16" : "half";
+    d["distance_step"] = storage.distance_step;
+    d["confidence"] = storage.keep_confidence;
+    d["bytes_per_texel"] = storage.bytes_per_texel();
+    return d;
+}
+
+inline pybind11::dict throughput_dict(const ThroughputResult& r) {
+    pybind11::dict d;
+    d["rays"] = r.rays;
+    d["hits"] = r.hits;
+    d["seconds"] = r.seconds;
+    d["rays_per_second"] = r.rays_per_second;
+    d["repeats"] = r.repeats;
+    return d;
 }
 
 // A bake's summary as a dict; normals_seconds only for bakes that estimate normals.

@@ -29,6 +29,8 @@ using lfprobe::python::dvec3_from;
 using lfprobe::python::Job;
 using lfprobe::python::placement_from;
 using lfprobe::python::sources_from;
+using lfprobe::python::storage_dict;
+using lfprobe::python::storage_from;
 
 namespace {
 
@@ -438,6 +440,19 @@ PYBIND11_MODULE(_native, m) {
     lfprobe::python::bind_mesh(m);
     lfprobe::python::bind_plan(m);
 
+    m.def(
+        "set_probe_set_storage",
+        [](const std::string& folder, const py::object& storage, double distance_step) {
+            const std::optional<ProbeStorage> chosen = storage_from(storage, distance_step);
+            if (!chosen.has_value()) {
+                throw InputError("set_probe_set_storage: give \"full\", \"compact\" or a dict");
+            }
+            const ProbeSetManifest manifest = set_probe_set_storage(folder, *chosen);
+            return storage_dict(manifest.storage);
+        },
+        py::arg("folder"), py::arg("storage"), py::arg("distance_step") = 0.0,
+        "Sets how the set's probes load into memory (its manifest's \"storage\"; the EXR files "
+        "keep full precision) and the manifest's per-probe memory_bytes.");
     m.def(
         "read_probe", [](const std::string& path) { return probe_dict(read_probe_exr(path)); },
         py::arg("path"),

@@ -149,7 +149,8 @@ const char* field_mode_name(FieldMode mode) {
     return "auto";
 }
 
-ProbeField ProbeField::load(const std::string& folder, Progress* progress, int coarse_resolution) {
+ProbeField ProbeField::load(const std::string& folder, Progress* progress, int coarse_resolution,
+                            const std::optional<ProbeStorage>& storage) {
     if (coarse_resolution < 0) {
         throw InputError(
             "probe field: coarse_resolution must be 0 (every level) or positive, got " +
@@ -163,6 +164,10 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
         throw InputError(folder + ": the probe set holds no probes");
     }
     field.check_placement();
+    if (storage.has_value()) {
+        field.manifest_.storage = *storage;
+    }
+    const ProbeStorage chosen = field.manifest_.storage;
     if (progress != nullptr) {
         progress->begin_stage("loading probes", count);
     }
@@ -172,9 +177,14 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
         if (progress != nullptr) {
             progress->throw_if_cancelled();
         }
-        field.probes_[i] = read_probe(folder, field.manifest_, i);
-        field.levels_[i] =
-            MinDistancePyramid(field.probes_[i].distance, field.probes_[i].resolution, coarsest);
+        ProbeMap& map = field.probes_[i];
+        map = read_probe(folder, field.manifest_, i);
+        if (!chosen.is_full()) {
+            pack_probe(map, chosen);
+        }
+        // The levels bound what the trace reads: the packed distances when packed.
+        field.levels_[i] = MinDistancePyramid(decoded_distances(map), map.resolution, coarsest);
+        field.manifest_.probes[i].memory_bytes = map.memory_bytes();
         if (progress != nullptr) {
             progress->advance(1);
         }
@@ -204,10 +214,10 @@ ProbeField::ProbeField(const ProbePlacement& placement, std::vector<ProbeMap> pr
 void ProbeField::build_levels(Progress* progress) {
     levels_.resize(probes_.size());
     tbb::parallel_for(std::size_t{0}, probes_.size(), [&](std::size_t i) {
-        if (probes_[i].resolution < 1 || probes_[i].distance.size() != probes_[i].texel_count()) {
+        if (!probes_[i].is_complete()) {
             throw InputError("probe field: probe " + std::to_string(i) + " has no maps");
         }
-        levels_[i] = MinDistancePyramid(probes_[i].distance, probes_[i].resolution);
+        levels_[i] = MinDistancePyramid(decoded_distances(probes_[i]), probes_[i].resolution);
         if (progress != nullptr) {
             progress->advance(1);
         }

@@ -33,9 +33,23 @@ void ProbeMap::set_empty(std::size_t i) {
     distance[i] = kEmptyDistance;
 }
 
+bool ProbeMap::is_complete() const {
+    const std::size_t n = texel_count();
+    if (resolution < 1) {
+        return false;
+    }
+    const bool has_distance =
+        packed.distance.empty() ? distance.size() == n : packed.distance.size() == n;
+    const bool has_radiance =
+        packed.srgb.empty() ? rgba.size() >= 3 * n : packed.srgb.size() == 3 * n;
+    const bool has_normal =
+        packed.normal.empty() ? normal.size() == 3 * n : packed.normal.size() == n;
+    return has_distance && has_radiance && has_normal;
+}
+
 std::size_t ProbeMap::memory_bytes() const {
     return rgba.size() * sizeof(Imath::half) + distance.size() * sizeof(float) +
-           normal.size() * sizeof(Imath::half);
+           normal.size() * sizeof(Imath::half) + packed.memory_bytes();
 }
 
 ProbeCoverage coverage_of(const ProbeMap& map) {

@@ -84,6 +84,7 @@ json ProbeSetManifest::to_json() const {
     j["probes"] = list;
     j["bake"] = bake;
     j["sources"] = sources.is_null() ? json::array() : sources;
+    j["storage"] = storage.to_json();
     j["channels"] = json{{"R,G,B", "linear radiance, half"},
                          {"A", "confidence: 1 measured, (0,1) inferred, 0 unknown or empty"},
                          {"Z", "radial distance in metres, float32; NaN unknown, +inf empty"},
@@ -142,6 +143,9 @@ ProbeSetManifest ProbeSetManifest::from_json(const json& j, const std::string& w
     }
     m.bake = j.value("bake", json::object());
     m.sources = j.value("sources", json::array());
+    if (j.contains("storage")) {
+        m.storage = ProbeStorage::from_json(j["storage"], where);
+    }
     return m;
 }
 
@@ -185,6 +189,17 @@ ProbeMap read_probe(const std::string& folder, const ProbeSetManifest& manifest,
     }
     map.position = record.position;
     return map;
+}
+
+ProbeSetManifest set_probe_set_storage(const std::string& folder, const ProbeStorage& storage) {
+    ProbeSetManifest manifest = read_manifest(folder);
+    manifest.storage = storage;
+    for (ProbeRecord& record : manifest.probes) {
+        const auto n = static_cast<std::size_t>(record.resolution);
+        record.memory_bytes = n * n * storage.bytes_per_texel();
+    }
+    write_manifest(folder, manifest);
+    return manifest;
 }
 
 BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest,

@@ -82,7 +82,7 @@ public:
             near_miss_.valid = false;
             return false;
         }
-        const double r = static_cast<double>(map_.distance[i]);
+        const double r = static_cast<double>(map_.distance_at(i));
         if (std::isnan(r)) {
             return stop_unknown({x, y}, t0);
         }
@@ -434,7 +434,7 @@ private:
 };
 
 void check_inputs(const ProbeMap& map, const glm::dvec3& direction) {
-    if (map.resolution < 1 || map.distance.size() != map.texel_count()) {
+    if (!map.is_complete()) {
         throw InputError("probe trace: the probe map is empty or inconsistent (resolution " +
                          std::to_string(map.resolution) + ")");
     }

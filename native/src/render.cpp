@@ -1,12 +1,9 @@
 #include "lfprobe/render.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
-#include <limits>
 #include <vector>
 
-#include <tbb/blocked_range.h>
 #include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
 #include <tbb/partitioner.h>

@@ -51,9 +51,11 @@ def test_page_is_self_contained_and_has_every_section(tiny_report):
 def test_sweep_rows_carry_speed_error_memory_and_bake_time(tiny_report):
     out, data, _ = tiny_report
     rows = data["sweep"]
-    # 2 scan densities × 2 resolutions × 2 bake variants + 2 mesh resolutions, and one more
-    # trace setting on the reference probe set
-    assert len(rows) == 2 * 2 * 2 + 2 + 1
+    # 2 scan densities × 2 resolutions × 2 bake variants + 2 mesh resolutions, one more trace
+    # setting on the reference probe set, and compact storage on both resolutions of the
+    # densest splat + fill bake
+    assert len(rows) == 2 * 2 * 2 + 2 + 1 + 2
+    assert sum(r["storage"] == "compact" for r in rows) == 2
     for row in rows:
         assert row["ms_per_frame"] > 0 and row["rays_per_second"] > 0
         assert row["memory_bytes_per_probe"] > 0 and row["bake_seconds"] > 0
@@ -119,9 +121,13 @@ def test_planning_section_compares_auto_adaptive_and_bytes_per_probe(tiny_report
     # a. auto against every fixed resolution of the preset (64², 128²), with the verdict's figures
     rows = plan["resolution"]["rows"]
     fixed = [r for r in rows if r["setting"].startswith("fixed")]
-    assert [r["resolution"] for r in fixed] == [64, 128]
-    auto = rows[-1]
-    assert auto["setting"].startswith("auto") and auto["probes"] == 12
+    assert [(r["resolution"], r["storage"]) for r in fixed] == [
+        (64, "full"), (128, "full"), (64, "compact"), (128, "compact")]
+    auto_full, auto = rows[-2:]
+    # bake --auto records compact storage; the same probes at full precision come with it
+    assert auto["setting"].startswith("auto") and auto["probes"] == 12 and auto["storage"] == "compact"
+    assert auto_full["storage"] == "full" and auto_full["resolutions"] == auto["resolutions"]
+    assert auto["memory_bytes"] < 0.5 * auto_full["memory_bytes"]
     for row in rows:
         assert 0 < row["psnr"] < 100 and 0 <= row["flip"] <= 1 and 0 <= row["hole_rate"] <= 1
         assert row["memory_bytes"] > 0 and row["bake_seconds"] > 0
@@ -131,6 +137,14 @@ def test_planning_section_compares_auto_adaptive_and_bytes_per_probe(tiny_report
     assert r["psnr_difference_db"] == pytest.approx(auto["psnr"] - r["best_fixed_psnr"])
     assert r["memory_ratio"] == pytest.approx(auto["memory_bytes"] / r["best_fixed_memory_bytes"])
     assert r["matches_best_error"] == (r["psnr_difference_db"] >= -0.1)
+    # storage: the same sets loaded full and compact, 7 against 18 bytes a texel on the maps
+    storage = plan["storage"]
+    assert [s["resolution"] for s in storage] == [64, 128]
+    for s in storage:
+        n = s["resolution"]
+        assert s["full_memory_bytes_per_probe"] - s["compact_memory_bytes_per_probe"] == 11 * n * n
+        assert abs(s["psnr_difference_db"]) < 0.5
+    assert os.path.exists(out / "planning_storage.csv")
     # b. adaptive placement against a uniform grid, per walk frame
     placement = plan["placement"]
     adaptive, uniform = placement["adaptive"], placement["uniform"]

@@ -1,6 +1,7 @@
 """The lfprobe command line (bpy-free): ``./lfprobe SUBCOMMAND ...`` from the checkout.
 
-Subcommands: bake (scan files → probe set), info (what a probe set holds), render (a view
+Subcommands: bake (scan files → probe set), info (what a probe set holds), store (how a set
+loads into memory), render (a view
 traced through the probes), splat (the raw cloud drawn as splats), camera (a camera file),
 compare (metrics of a view against ground truth), bench (measured figures). Exit status: 0 success, 2 bad input, 1 other failure, 130 cancelled.
 """
@@ -47,6 +48,9 @@ def _cmd_bake(args) -> int:
         if args.mesh:
             raise ValueError("--auto plans from scan points: use it with --scan")
         options.plan = cli_place.plan_options(args)
+    # --auto models only what the data carries, in memory too: compact unless told otherwise.
+    options.storage = args.storage or ("compact" if args.auto else None)
+    options.distance_step = args.distance_step
     progress = None if args.quiet else TerminalProgress()
     if args.mesh:
         options.extra["supersample"] = args.supersample
@@ -90,6 +94,35 @@ def _print_bake_summary(args, summary: dict, source: str) -> int:
             f"  per probe: {_mib(summary['bytes_in_memory_per_probe'])} in memory, "
             f"{_mib(summary['bytes_on_disk'] / n)} on disk"
         )
+    if summary.get("storage"):
+        print(f"  storage: {_storage_text(summary['storage'])}")
+    return 0
+
+
+def _storage_text(storage: dict) -> str:
+    """One line for a manifest's "storage" dict."""
+    step = storage.get("distance_step") or 0.0
+    if storage.get("radiance") == "half" and storage.get("normal") == "half" and not step:
+        return "full (half RGBA, float32 distance, half normals)"
+    distance = f"16-bit distance in {step * 1000:g} mm steps" if step else "float32 distance"
+    parts = [f"{storage.get('radiance')} radiance", distance, f"{storage.get('normal')} normals"]
+    if not storage.get("confidence", True):
+        parts.append("no confidence")
+    text = ", ".join(parts)
+    if "bytes_per_texel" in storage:
+        text += f" ({storage['bytes_per_texel']} bytes a texel)"
+    return text
+
+
+def _cmd_store(args) -> int:
+    _native = native.load()
+    stored = _native.set_probe_set_storage(args.folder, args.storage, distance_step=args.distance_step)
+    info = summarize(args.folder)
+    if args.json:
+        print(json.dumps({"storage": stored, "memory_bytes": info["memory_bytes"]}, indent=2))
+        return 0
+    print(f"{info['folder']}: loads as {_storage_text(stored)}; {_mib(info['memory_bytes'])} in memory "
+          f"with coarse levels ({_mib(info['memory_bytes_per_probe'])} per probe)")
     return 0
 
 
@@ -114,6 +147,8 @@ def _cmd_info(args) -> int:
         f"  coverage (mean): surface {100 * c['surface']:.2f}%, inferred {100 * c['inferred']:.2f}%, "
         f"unknown {100 * c['unknown']:.2f}%, empty {100 * c['empty']:.2f}%"
     )
+    if info.get("storage"):
+        print(f"  storage in memory: {_storage_text(info['storage'])}")
     per = info["memory_bytes_per_probe"]
     print(
         f"  memory: {_mib(info['memory_bytes'])} ({_mib(per)} per probe with coarse levels); "
@@ -139,7 +174,9 @@ def _cmd_info(args) -> int:
 def _cmd_render(args) -> int:
     _native = native.load()
     job = _native.start_render(args.probes, args.camera, args.out, mode=args.mode,
-                               threads=args.threads, thickness=args.thickness)
+                               threads=args.threads, thickness=args.thickness,
+                               storage=None if args.storage == "manifest" else args.storage,
+                               distance_step=args.distance_step)
     stats = job.run(None if args.quiet else TerminalProgress())
     if args.json:
         print(json.dumps(stats, indent=2))
@@ -194,6 +231,13 @@ def _cmd_bench(args) -> int:
     return bench.main(args)
 
 
+def _add_storage_arguments(parser, choices, default, text: str) -> None:
+    parser.add_argument("--storage", choices=choices, default=default, help=text)
+    parser.add_argument("--distance-step", type=float, default=0.0, metavar="M",
+                        help="compact storage: distance quantum in metres (default 0.001, half "
+                             "the ~2 mm range noise of a FARO-class scanner at 10 m)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="lfprobe", description="Light field probes from laser scans.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -227,7 +271,19 @@ def build_parser() -> argparse.ArgumentParser:
                            "points support (--res is then ignored), probes inside geometry or "
                            "against walls moved, useless ones dropped")
     cli_place.add_plan_arguments(bake)
+    _add_storage_arguments(bake, ["full", "compact"], None,
+                           "how the probes load into memory (the files keep full precision): full "
+                           "(18 bytes a texel), compact (7: 8-bit sRGB radiance, 16-bit distance, "
+                           "8+8-bit normals, no confidence); default full, compact with --auto")
     bake.set_defaults(run=_cmd_bake)
+
+    store = sub.add_parser("store", help="set how a baked probe set loads into memory")
+    store.add_argument("folder", metavar="DIR")
+    store.add_argument("storage", choices=["full", "compact"])
+    store.add_argument("--distance-step", type=float, default=0.0, metavar="M",
+                       help="compact: distance quantum in metres (default 0.001)")
+    store.add_argument("--json", action="store_true")
+    store.set_defaults(run=_cmd_store)
 
     info = sub.add_parser("info", help="what a probe set holds")
     info.add_argument("folder", metavar="DIR")
@@ -245,6 +301,9 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--thickness", type=float, default=0.02, help="surface thickness (m)")
     render.add_argument("--json", action="store_true", help="print the stats as JSON")
     render.add_argument("--quiet", action="store_true")
+    _add_storage_arguments(render, ["manifest", "full", "compact"], "manifest",
+                           "how the probes are held in memory for this render: as the set's "
+                           "manifest says, full or compact")
     render.set_defaults(run=_cmd_render)
 
     splat = sub.add_parser("splat", help="render the raw cloud as z-buffered splats (baseline)")

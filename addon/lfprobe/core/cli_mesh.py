@@ -8,7 +8,7 @@ import os
 from typing import Sequence
 
 from . import native
-from .pipeline import BakeOptions, ProbePlacementSpec, Progress
+from .pipeline import BakeOptions, ProbePlacementSpec, Progress, apply_storage
 from .progress import TerminalProgress
 from .sources import file_sha256
 
@@ -45,10 +45,7 @@ def bake_from_mesh(
         mesh,
         out_dir,
         resolution=int(options.resolution),
-        positions=[list(map(float, p)) for p in placement.positions],
-        grid_min=None if placement.grid_min is None else list(map(float, placement.grid_min)),
-        grid_max=None if placement.grid_max is None else list(map(float, placement.grid_max)),
-        counts=None if placement.counts is None else [int(c) for c in placement.counts],
+        **placement.native_kwargs(),
         sources_json=json.dumps(sources),
         supersample=int(options.extra.get("supersample", 1)),
     )
@@ -56,6 +53,7 @@ def bake_from_mesh(
         return job
     summary = job.run(progress)
     summary["triangles"] = mesh.triangle_count
+    apply_storage(out_dir, summary, options)
     return summary
 
 

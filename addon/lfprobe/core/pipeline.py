@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Optional, Sequence
 
 from . import native
+from .probe_set import read_manifest
 from .sources import default_cache_dir, describe_scan
 
 Progress = Optional[Callable[[float, str], object]]
@@ -34,6 +35,15 @@ class ProbePlacementSpec:
         elif not self.positions:
             raise ValueError("no probes: give --probe X Y Z or a grid")
 
+    def native_kwargs(self) -> dict:
+        """positions / grid_min / grid_max / counts as the native bake and plan calls take them."""
+        return dict(
+            positions=[list(map(float, p)) for p in self.positions],
+            grid_min=None if self.grid_min is None else list(map(float, self.grid_min)),
+            grid_max=None if self.grid_max is None else list(map(float, self.grid_max)),
+            counts=None if self.counts is None else [int(c) for c in self.counts],
+        )
+
 
 @dataclass
 class BakeOptions:
@@ -46,6 +56,27 @@ class BakeOptions:
     # from the data, classification, moves and drops, with these options of
     # _native.start_bake_planned_probe_set (e.g. {"min_resolution": 64, "max_resolution": 2048}).
     plan: Optional[dict] = None
+    # How the probes load into memory (the files stay full precision): None leaves the
+    # manifest's default (full), "full" or "compact" (8-bit sRGB radiance, distance in steps of
+    # distance_step metres, 8+8-bit normals, no confidence; see native probe_storage.hpp).
+    storage: Optional[str] = None
+    distance_step: float = 0.0
+
+
+def apply_storage(folder: str, summary: Optional[dict], options: BakeOptions) -> Optional[dict]:
+    """Records options.storage in the set's manifest (a no-op for None) and the in-memory bytes
+    per probe it gives in `summary`. Returns the storage dict the manifest now holds."""
+    if options.storage is None:
+        return None
+    stored = native.load().set_probe_set_storage(folder, options.storage,
+                                                 distance_step=float(options.distance_step))
+    if summary is not None:
+        summary["storage"] = stored
+        manifest = read_manifest(folder)
+        probes = manifest["probes"]
+        if probes:
+            summary["bytes_in_memory_per_probe"] = max(int(p.get("memory_bytes", 0)) for p in probes)
+    return stored
 
 
 def load_scans(
@@ -88,10 +119,7 @@ def bake_from_cloud(
     placement.validate()
     kwargs = dict(
         resolution=int(options.resolution),
-        positions=[list(map(float, p)) for p in placement.positions],
-        grid_min=None if placement.grid_min is None else list(map(float, placement.grid_min)),
-        grid_max=None if placement.grid_max is None else list(map(float, placement.grid_max)),
-        counts=None if placement.counts is None else [int(c) for c in placement.counts],
+        **placement.native_kwargs(),
         sources_json=json.dumps(list(sources)),
         splat_scale=float(options.splat_scale),
         hole_fill_texels=int(options.hole_fill_texels),
@@ -101,13 +129,17 @@ def bake_from_cloud(
         plan = {"resolution": int(options.resolution), "splat_scale": float(options.splat_scale),
                 "hole_fill_texels": int(options.hole_fill_texels), **options.plan}
         job = _native.start_bake_planned_probe_set(
-            cloud, out_dir, positions=kwargs["positions"], grid_min=kwargs["grid_min"],
-            grid_max=kwargs["grid_max"], counts=kwargs["counts"],
-            sources_json=kwargs["sources_json"], options=plan)
-        return job if start_only else job.run(progress)
-    if start_only:
+            cloud, out_dir, **placement.native_kwargs(), sources_json=kwargs["sources_json"],
+            options=plan)
+        if start_only:
+            return job
+        summary = job.run(progress)
+    elif start_only:
         return _native.start_bake_probe_set(cloud, out_dir, **kwargs)
-    return _native.bake_probe_set(cloud, out_dir, progress=progress, **kwargs)
+    else:
+        summary = _native.bake_probe_set(cloud, out_dir, progress=progress, **kwargs)
+    apply_storage(out_dir, summary, options)
+    return summary
 
 
 def plan_probes(cloud, placement: ProbePlacementSpec, plan_options: dict,
@@ -116,14 +148,7 @@ def plan_probes(cloud, placement: ProbePlacementSpec, plan_options: dict,
     moved, dropped, the figures behind them). World coordinates."""
     _native = native.load()
     placement.validate()
-    job = _native.start_plan_probes(
-        cloud,
-        positions=[list(map(float, p)) for p in placement.positions],
-        grid_min=None if placement.grid_min is None else list(map(float, placement.grid_min)),
-        grid_max=None if placement.grid_max is None else list(map(float, placement.grid_max)),
-        counts=None if placement.counts is None else [int(c) for c in placement.counts],
-        options=dict(plan_options),
-    )
+    job = _native.start_plan_probes(cloud, **placement.native_kwargs(), options=dict(plan_options))
     return job.run(progress)
 
 

@@ -69,6 +69,7 @@ def summarize(folder: str) -> dict:
         "disk_bytes_per_probe": disk / len(probes) if probes else 0,
         "missing_files": missing,
         "bake": manifest.get("bake", {}),
+        "storage": manifest.get("storage"),
         "sources": manifest.get("sources", []),
         "probes": probes,
     }

@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -61,9 +62,12 @@ public:
     // parallel. Progress counts probes; cancellation is honoured between probes.
     // `coarse_resolution` is the size of the coarsest min-distance level kept (the level a
     // trace starts its skipping from): 0 or 1 keeps every level down to 1×1; a larger value
-    // drops the levels below it (less memory, more steps per ray).
+    // drops the levels below it (less memory, more steps per ray). `storage` is how the probes
+    // are held in memory (probe_storage.hpp); none: as the manifest says (full precision
+    // when it says nothing).
     [[nodiscard]] static ProbeField load(const std::string& folder, Progress* progress = nullptr,
-                                         int coarse_resolution = 0);
+                                         int coarse_resolution = 0,
+                                         const std::optional<ProbeStorage>& storage = {});
 
     // A field over probes already in memory, in the placement's index order (probe i of a grid
     // is x + counts[0] * (y + counts[1] * z)). The probes' own positions are where they are
@@ -72,6 +76,8 @@ public:
                const glm::dvec3& world_offset = glm::dvec3(0.0));
 
     [[nodiscard]] const ProbeSetManifest& manifest() const { return manifest_; }
+    // How the probes are held in memory.
+    [[nodiscard]] const ProbeStorage& storage() const { return manifest_.storage; }
     [[nodiscard]] const glm::dvec3& world_offset() const { return manifest_.world_offset; }
     [[nodiscard]] bool is_grid() const { return manifest_.placement.is_grid; }
     [[nodiscard]] const ProbeGrid& grid() const { return manifest_.placement.grid; }

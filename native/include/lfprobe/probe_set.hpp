@@ -13,6 +13,7 @@
 #include "lfprobe/probe_bake.hpp"
 #include "lfprobe/probe_map.hpp"
 #include "lfprobe/probe_placement.hpp"
+#include "lfprobe/probe_storage.hpp"
 #include "lfprobe/progress.hpp"
 
 namespace lfprobe {
@@ -35,6 +36,9 @@ struct ProbeSetManifest {
     std::vector<ProbeRecord> probes;
     nlohmann::json bake;    // settings the probes were baked with
     nlohmann::json sources; // array: path, hash, points, scanner, ...
+    // How a field loads the probes by default (the files stay full precision): chosen from the
+    // data at bake time, or set later with set_probe_set_storage.
+    ProbeStorage storage;
 
     [[nodiscard]] nlohmann::json to_json() const;
     [[nodiscard]] static ProbeSetManifest from_json(const nlohmann::json& j,
@@ -45,6 +49,10 @@ struct ProbeSetManifest {
 
 [[nodiscard]] ProbeSetManifest read_manifest(const std::string& folder);
 void write_manifest(const std::string& folder, const ProbeSetManifest& manifest);
+
+// Sets the in-memory storage a set's probes load with (the files are not touched) and the
+// per-probe memory figures of its manifest; the manifest is rewritten atomically.
+ProbeSetManifest set_probe_set_storage(const std::string& folder, const ProbeStorage& storage);
 
 // Reads probe `index` of the set in `folder`.
 [[nodiscard]] ProbeMap read_probe(const std::string& folder, const ProbeSetManifest& manifest,

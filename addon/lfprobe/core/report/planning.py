@@ -16,7 +16,7 @@ from ..adaptive import place_adaptively
 from ..pipeline import BakeOptions, ProbePlacementSpec
 from ..probe_set import PAPER_BYTES_PER_2048_PROBE, read_manifest
 from .measure import RunContext, measure, nearest_probe_distance, pixel_count, timing
-from .presets import DEFAULT_TRACE
+from .presets import COMPACT_TRACE, DEFAULT_TRACE
 from .scene import grid_positions
 from .sweep import Sweep, aggregate, scaled_grid, setup_label
 
@@ -34,37 +34,66 @@ def _mean(rows: List[Dict[str, object]], key: str) -> Optional[float]:
     return sum(values) / len(values) if values else None
 
 
-def _fixed_rows(ctx: RunContext, sweep: Sweep) -> List[Dict[str, object]]:
+def _fixed_rows(ctx: RunContext, sweep: Sweep, trace=DEFAULT_TRACE) -> List[Dict[str, object]]:
     """The sweep's fixed-resolution settings on the densest scan, scene grid, lfprobe's bake,
-    default trace: one aggregated row per resolution."""
+    `trace` (the default trace, or the default trace on compact storage): one aggregated row per
+    resolution."""
     densest = sweep.densities[0]
     rows = [r for r in sweep.view_rows
             if r["source"] == "scan" and r["scan_step_deg"] == densest.step_deg and r["bake"] == "splat + fill"
-            and r["counts"] == list(ctx.scene.grid_counts) and r["trace"] == DEFAULT_TRACE[0]]
+            and r["counts"] == list(ctx.scene.grid_counts) and r["trace"] == trace[0]]
+    compact = trace[1].get("storage") == "compact"
     out = []
     for row in sorted(aggregate(rows), key=lambda r: r["resolution"]):
-        out.append({"setting": f"fixed {row['resolution']}²", "resolution": row["resolution"],
+        out.append({"setting": f"fixed {row['resolution']}²" + (", compact storage" if compact else ""),
+                    "resolution": row["resolution"], "storage": "compact" if compact else "full",
                     "resolutions": [row["resolution"]] * row["probes"],
                     "resolution_summary": f"{row['resolution']}² × {row['probes']}", "probes": row["probes"],
-                    **{k: row.get(k) for k in ("psnr", "ssim", "flip", "hole_rate", "unknown_rate",
-                                               "ms_per_frame", "bake_seconds", "memory_bytes_per_probe")},
+                    **{k: row.get(k) for k in ("psnr", "ssim", "flip", "hole_rate", "unknown_rate", "depth_absrel",
+                                               "depth_rmse", "ms_per_frame", "bake_seconds",
+                                               "memory_bytes_per_probe")},
                     "memory_bytes": row["memory_bytes_per_probe"] * row["probes"]})
     return out
 
 
-def _auto_row(ctx: RunContext, sweep: Sweep) -> Dict[str, object]:
-    """The planned bake (bake --auto with the CLI's defaults) of the scene grid from the densest
-    scan, traced and measured on every view."""
+def storage_comparison(full: List[Dict[str, object]], compact: List[Dict[str, object]]) -> List[Dict[str, object]]:
+    """Per fixed resolution: the same probes loaded full and compact, error and memory side by side."""
+    by_resolution = {r["resolution"]: r for r in compact}
+    out = []
+    for f in full:
+        c = by_resolution.get(f["resolution"])
+        if c is None:
+            continue
+        row = {"resolution": f["resolution"], "probes": f["probes"]}
+        for key in ("psnr", "flip", "depth_absrel", "depth_rmse", "hole_rate", "ms_per_frame", "memory_bytes_per_probe"):
+            row[f"full_{key}"], row[f"compact_{key}"] = f.get(key), c.get(key)
+        row["psnr_difference_db"] = (c["psnr"] - f["psnr"]) if _finite(c.get("psnr")) and _finite(f.get("psnr")) else None
+        row["memory_ratio"] = c["memory_bytes_per_probe"] / f["memory_bytes_per_probe"]
+        out.append(row)
+    return out
+
+
+def _auto_rows(ctx: RunContext, sweep: Sweep) -> List[Dict[str, object]]:
+    """The planned bake (bake --auto with the CLI's defaults: compact storage) of the scene grid
+    from the densest scan, traced and measured on every view; and the same probes loaded at full
+    precision, which shows what the resolution choice alone does."""
     densest = sweep.densities[0]
     s = ctx.scene
     folder = ctx.work_path("planning", "auto")
     placement = ProbePlacementSpec(grid_min=s.grid_min, grid_max=s.grid_max, counts=s.grid_counts)
     start = time.perf_counter()
-    summary = pipeline.bake_from_cloud(densest.cloud, folder, placement, BakeOptions(plan={}))
+    summary = pipeline.bake_from_cloud(densest.cloud, folder, placement, BakeOptions(plan={}, storage="compact"))
     wall = time.perf_counter() - start
+    rows = [_auto_row(ctx, folder, summary, wall, storage)
+            for storage in ("full", "compact")]
+    shutil.rmtree(folder, ignore_errors=True)
+    return rows
+
+
+def _auto_row(ctx: RunContext, folder: str, summary: dict, wall: float, storage: str) -> Dict[str, object]:
     manifest = read_manifest(folder)
     plan = manifest["bake"].get("plan", [])
-    field = ctx.native.ProbeField.load(folder)
+    field = ctx.native.ProbeField.load(folder, storage=storage)
     view_rows = []
     for view in ctx.views:
         camera = ctx.camera(view)
@@ -74,12 +103,14 @@ def _auto_row(ctx: RunContext, sweep: Sweep) -> Dict[str, object]:
         figures.pop("confusion")
         view_rows.append({**figures, **timing(stats, pixel_count(camera))})
     kept = [p["resolution"] for p in plan if not p["dropped"]]
-    row = {"setting": AUTO_SETTING, "resolution": None, "resolutions": sorted(kept),
+    row = {"setting": AUTO_SETTING + (", compact storage" if storage == "compact" else ", full storage"),
+           "storage": storage, "resolution": None, "resolutions": sorted(kept),
            "resolution_counts": {str(k): v for k, v in sorted(Counter(kept).items())},
            "resolution_summary": ", ".join(f"{k}² × {v}" for k, v in sorted(Counter(kept).items()))
            + (f", {len(plan) - len(kept)} dropped" if len(plan) > len(kept) else ""),
            "probes": field.probe_count,
-           **{k: _mean(view_rows, k) for k in ("psnr", "ssim", "flip", "hole_rate", "unknown_rate", "ms_per_frame")},
+           **{k: _mean(view_rows, k) for k in ("psnr", "ssim", "flip", "hole_rate", "unknown_rate", "depth_absrel",
+                                               "depth_rmse", "ms_per_frame")},
            "bake_seconds": summary["bake_seconds"] + summary.get("normals_seconds", 0.0),
            "bake_wall_seconds": wall,
            "memory_bytes": field.memory_bytes, "memory_bytes_per_probe": field.memory_bytes / field.probe_count,
@@ -87,7 +118,6 @@ def _auto_row(ctx: RunContext, sweep: Sweep) -> Dict[str, object]:
            "classes": dict(Counter(p["class"] for p in plan)),
            "data_resolution_median": _median([p["data_resolution"] for p in plan if p.get("data_resolution")])}
     del field
-    shutil.rmtree(folder, ignore_errors=True)
     return row
 
 
@@ -268,21 +298,25 @@ def bytes_at_equal_error(rows: List[Dict[str, object]], reference: Dict[str, obj
 def run(ctx: RunContext, sweep: Sweep) -> Dict[str, object]:
     ctx.log("model only what a scene needs: auto resolution, adaptive placement")
     fixed = _fixed_rows(ctx, sweep)
-    auto = _auto_row(ctx, sweep)
+    fixed_compact = _fixed_rows(ctx, sweep, COMPACT_TRACE)
+    auto_full, auto = _auto_rows(ctx, sweep)
     ctx.log(f"  auto: {auto['probes']} probes, resolutions {auto['resolution_counts']}, "
-            f"PSNR {auto['psnr']:.2f} dB, {auto['memory_bytes'] / 2**20:.2f} MiB")
-    resolution_rows = fixed + [auto]
-    comparison = resolution_comparison(fixed, auto)
+            f"PSNR {auto['psnr']:.2f} dB, {auto['memory_bytes'] / 2**20:.2f} MiB compact, "
+            f"{auto_full['psnr']:.2f} dB, {auto_full['memory_bytes'] / 2**20:.2f} MiB full")
+    resolution_rows = fixed + fixed_compact + [auto_full, auto]
+    # bake --auto (compact) against the best of every fixed resolution, stored either way.
+    comparison = resolution_comparison(fixed + fixed_compact, auto)
     placement = placement_comparison(ctx, sweep, fixed)
-    # Equal error: every scan-baked setting of the sweep (default trace) and auto.
+    # Equal error: every scan-baked setting of the sweep (default trace, full or compact) and auto.
     scan_settings = [dict(r, memory_bytes=r["memory_bytes_per_probe"] * r["probes"])
                      for r in aggregate(sweep.view_rows)
-                     if r["source"] == "scan" and r["trace"] == DEFAULT_TRACE[0]]
+                     if r["source"] == "scan" and r["trace"] in (DEFAULT_TRACE[0], COMPACT_TRACE[0])]
     for r in scan_settings:
-        r["setting"] = setup_label(r)
+        r["setting"] = setup_label(r) + (", compact storage" if r.get("storage") == "compact" else "")
     reference = dict(fixed[-1], setting=f"scan {sweep.densities[0].step_deg:g}°, splat + fill, {fixed[-1]['setting']}")
-    equal_error = bytes_at_equal_error(scan_settings + [auto], reference)
+    equal_error = bytes_at_equal_error(scan_settings + [auto_full, auto], reference)
     return {"resolution": {"rows": resolution_rows, **comparison},
+            "storage": storage_comparison(fixed, fixed_compact),
             "placement": {k: v for k, v in placement.items() if k != "frames_rows"},
             "placement_frames": placement["frames_rows"],
             "bytes_at_equal_error": equal_error}
@@ -322,6 +356,17 @@ def findings(planning: Dict[str, object]) -> List[str]:
            f"({pl['scene_grid']['memory_bytes'] / mib:.2f} MiB) on the same frames: holes "
            f"{pl['scene_grid']['hole_rate']:.2%}, PSNR {pl['scene_grid']['psnr']:.2f} dB."
            if pl.get("scene_grid") else ""))
+    storage = planning.get("storage") or []
+    if storage:
+        worst = min(storage, key=lambda r: r["psnr_difference_db"] if _finite(r.get("psnr_difference_db")) else 0.0)
+        out.append(
+            "Storage sized to the data (the same probes loaded compact: 8-bit sRGB radiance, 16-bit distance in "
+            "1 mm steps, 8+8-bit octahedral normals, no confidence; 7 bytes a texel against 18): "
+            + "; ".join(f"{r['resolution']}² {r['full_memory_bytes_per_probe'] / mib:.2f} → "
+                        f"{r['compact_memory_bytes_per_probe'] / mib:.2f} MiB per probe "
+                        f"({r['memory_ratio']:.2f}×), PSNR {r['full_psnr']:.2f} → {r['compact_psnr']:.2f} dB"
+                        for r in storage)
+            + f". The largest PSNR change is {worst['psnr_difference_db']:+.3f} dB (at {worst['resolution']}²).")
     out.append(
         f"At equal error (mean PSNR ≥ {eq['reference_psnr']:.2f} dB of {eq['reference_setting']}): the "
         f"smallest memory per probe is {eq['bytes_per_probe'] / mib:.3f} MiB ({eq['setting']}), "

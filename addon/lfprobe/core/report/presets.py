@@ -19,6 +19,13 @@ TRACE_VARIANTS = [
     ("thickness 5 cm", {"mode": "auto", "thickness": 0.05, "use_coarse_levels": True}),
 ]
 
+# The default trace on probes held in compact storage (ProbeField.load(storage="compact"):
+# 8-bit sRGB radiance, 16-bit distance in 1 mm steps, 8+8-bit normals, no confidence). The
+# sweep runs it beside the default on every fixed resolution of the densest scan.
+COMPACT_TRACE = ("default, compact storage", {**DEFAULT_TRACE[1], "storage": "compact"})
+# Trace keys that are load-time settings of ProbeField.load, not render arguments.
+LOAD_KEYS = ("coarse_resolution", "storage")
+
 # Bake settings compared in the resolution sweep: the project's splatted, hole-filled bake and
 # the paper's one-point-one-texel bake (no footprint, no hole filling).
 BAKE_VARIANTS = {

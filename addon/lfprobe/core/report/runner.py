@@ -194,6 +194,7 @@ def _write_tables(out_dir: str, data: Dict[str, object]) -> None:
     plan = data["planning"]
     files.write_csv(os.path.join(out_dir, "planning_resolution.csv"), plan["resolution"]["rows"])
     files.write_csv(os.path.join(out_dir, "planning_walk.csv"), plan["placement_frames"])
+    files.write_csv(os.path.join(out_dir, "planning_storage.csv"), plan.get("storage", []))
     files.write_csv(os.path.join(out_dir, "planning_iterations.csv"),
                     without(plan["placement"]["adaptive"]["iterations"], "unknown_rate_per_view"))
 
@@ -398,7 +399,7 @@ def _page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
                                             ("status_differs", "pixels changing status", num(".3%")),
                                             ("psnr_vs_lookup", "PSNR dB vs lookup", num(".2f"))]))
     page.paragraph("Raw figures: report.json, sweep.csv, sweep_views.csv, distance.csv, walk.csv, at_probe.csv, "
-                   "peers.csv, stability.csv, ground_truth.csv, planning_resolution.csv, planning_walk.csv, "
+                   "peers.csv, stability.csv, ground_truth.csv, planning_resolution.csv, planning_walk.csv, planning_storage.csv, "
                    "planning_iterations.csv beside this file; images in images/.", "note")
     return page.render()
 
@@ -454,6 +455,27 @@ def _planning_section(page, data: Dict[str, object], img) -> None:
                                               ("distance_to_nearest_probe", "distance m", num(".3f")),
                                               ("ms_per_frame", "ms/frame", num(".2f")), *METRIC_COLUMNS,
                                               ("unknown_rate", "UNKNOWN", num(".2%"))]))
+    if plan.get("storage"):
+        page.add("<h3>Storage sized to the data</h3>")
+        page.paragraph("Each fixed-resolution set of the table above, loaded twice: at full precision (half RGBA, "
+                       "float32 distance, half normals: 18 bytes a texel) and compact (ProbeField.load(storage="
+                       "\"compact\"), what bake --auto records: 8-bit sRGB radiance, the precision of the scan's "
+                       "colours; 16-bit distance in 1 mm steps, half the ~2 mm range noise of the scanner; 8+8-bit "
+                       "octahedral normals, within 1° for the face test; no confidence channel, which the trace "
+                       "never reads: 7 bytes a texel). The files on disk are the same; coarse levels stay float32.",
+                       "note")
+        page.add(table(plan["storage"], [
+            ("resolution", "N", num(".0f")),
+            ("full_memory_bytes_per_probe", "MiB/probe full", num(".3f", 1 / MIB)),
+            ("compact_memory_bytes_per_probe", "MiB/probe compact", num(".3f", 1 / MIB)),
+            ("memory_ratio", "memory ratio", num(".3f")),
+            ("full_psnr", "PSNR full", num(".3f")), ("compact_psnr", "PSNR compact", num(".3f")),
+            ("psnr_difference_db", "ΔPSNR dB", num("+.3f")),
+            ("full_flip", "FLIP full", num(".4f")), ("compact_flip", "FLIP compact", num(".4f")),
+            ("full_depth_absrel", "depth AbsRel full", num(".5f")),
+            ("compact_depth_absrel", "depth AbsRel compact", num(".5f")),
+            ("full_hole_rate", "holes full", num(".3%")), ("compact_hole_rate", "holes compact", num(".3%")),
+            ("full_ms_per_frame", "ms full", num(".2f")), ("compact_ms_per_frame", "ms compact", num(".2f"))]))
     page.add("<h3>Bytes per probe at equal error</h3>")
     page.paragraph(f"Reference: {eq['reference_setting']} (the largest fixed resolution), mean PSNR "
                    f"{eq['reference_psnr']:.2f} dB. Among the {eq['candidates']} scan-baked settings of the sweep "

@@ -18,7 +18,7 @@ from .. import pipeline
 from ..cli_mesh import bake_from_mesh
 from ..pipeline import BakeOptions, ProbePlacementSpec
 from .measure import RunContext, measure, nearest_probe_distance, pixel_count, psnr_only, timing
-from .presets import BAKE_VARIANTS, DEFAULT_TRACE
+from .presets import BAKE_VARIANTS, COMPACT_TRACE, DEFAULT_TRACE, LOAD_KEYS
 from .scene import grid_positions
 
 
@@ -134,6 +134,7 @@ def _row(setup: ProbeSetup, bake_info: dict, memory_per_probe: float, trace_labe
            "mode": trace["mode"], "thickness": trace["thickness"],
            "coarse_levels": trace["use_coarse_levels"],
            "coarse_resolution": int(trace.get("coarse_resolution", 0)) or 1,
+           "storage": trace.get("storage", "full"),
            "memory_bytes_per_probe": memory_per_probe}
     row.update(bake_info)
     row["setting"] = setting_label(row)
@@ -193,7 +194,10 @@ class Sweep:
                 for variant in p.bake_variants:
                     setup = ProbeSetup("scan", res, full_grid[2], full_grid[0], full_grid[1], variant, density)
                     is_reference = density is densest and res == reference_res and variant == "splat + fill"
-                    setups.append((setup, p.trace_variants if is_reference else [DEFAULT_TRACE]))
+                    traces = list(p.trace_variants) if is_reference else [DEFAULT_TRACE]
+                    if density is densest and variant == "splat + fill":
+                        traces.append(COMPACT_TRACE)  # the storage comparison of "planning"
+                    setups.append((setup, traces))
         for factor in p.count_factors:
             if factor != 1.0:
                 lo, hi, counts = scaled_grid(ctx, factor)
@@ -213,11 +217,11 @@ class Sweep:
             ctx.log(f"  [{index + 1}/{len(setups)}] {setup_label(setup.describe())}: "
                     f"bake {info['bake_seconds']:.2f} s, {memory_per_probe / 2**20:.2f} MiB/probe")
             for trace_label, trace in traces:
-                # A coarse resolution is a load-time setting: that variant loads its own field.
-                coarse = int(trace.get("coarse_resolution", 0))
-                render_args = {k: v for k, v in trace.items() if k != "coarse_resolution"}
-                trace_field = (field if coarse == 0
-                               else ctx.native.ProbeField.load(folder, coarse_resolution=coarse))
+                # Coarse resolution and storage are load-time settings: such a variant loads
+                # its own field.
+                load_args = {k: v for k, v in trace.items() if k in LOAD_KEYS}
+                render_args = {k: v for k, v in trace.items() if k not in LOAD_KEYS}
+                trace_field = (ctx.native.ProbeField.load(folder, **load_args) if load_args else field)
                 trace_memory = trace_field.memory_bytes / trace_field.probe_count
                 for view in ctx.views:
                     camera = ctx.camera(view)
