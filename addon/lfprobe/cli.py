@@ -1,7 +1,9 @@
-"""Headless batch entry of the Blender add-on: import scans, bake, render and compare a saved scene.
+"""Headless batch entry of the Blender add-on: import scans, bake, add probes for views, render and
+compare a saved scene.
 
     blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- import --scan FILE... [--grid-from EMPTY] --save-as OUT.blend
     blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- bake [--grid NAME]
+    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- place (--views CAMERA... | --camera-path)
     blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- render [--camera NAME] --out IMG.exr
     blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- compare --reference OBJ... --out DIR
 
@@ -188,6 +190,60 @@ def _cmd_bake(package, args) -> int:
     return EXIT_OK
 
 
+def _cmd_place(package, args) -> int:
+    """Add Probes for Views on a grid: bakes it, adds probes at the eyes of the views that trace
+    the most UNKNOWN until the target or budget, and saves the .blend (the grid's settings and
+    its record of the added probes)."""
+    import bpy
+
+    grid_module = _blender_module(package, "grid")
+    place_views = _blender_module(package, "place_views")
+    scene = _scene(args.scene)
+    if args.grid:
+        grid_obj = scene.objects.get(args.grid)
+        if grid_obj is None or not grid_module.is_grid(grid_obj):
+            raise BatchError(f"no probe grid named '{args.grid}' in scene '{scene.name}'")
+    else:
+        grids = sorted((o for o in scene.objects if grid_module.is_grid(o)), key=lambda o: o.name)
+        if len(grids) != 1:
+            raise BatchError(f"scene '{scene.name}' has {len(grids) or 'no'} probe grid{'' if len(grids) == 1 else 's'}"
+                             + (": pass --grid NAME" if grids else " to add probes to"))
+        grid_obj = grids[0]
+    for name in args.views or ():
+        _camera(scene, name)  # names the missing object or non-camera before any work
+    if args.target_unknown is not None and not 0.0 <= args.target_unknown <= 1.0:
+        raise BatchError(f"--target-unknown must be a fraction from 0 to 1, got {args.target_unknown}")
+    if args.budget_mib is not None and not args.budget_mib >= 0.0:
+        raise BatchError(f"--budget-mib must be 0 (no budget) or a positive number of MiB, got {args.budget_mib}")
+    for option, value in (("--max-added", args.max_added), ("--frame-step", args.frame_step)):
+        if value is not None and value < 1:
+            raise BatchError(f"{option} must be at least 1, got {value}")
+    grid = grid_obj.lfprobe_grid
+    # Options given are stored on the grid (and saved with it), as the panel would set them.
+    grid.views_from = "CAMERA_PATH" if args.camera_path else "SELECTED"
+    for option in ("frame_step", "target_unknown", "budget_mib", "max_added"):
+        value = getattr(args, option)
+        if value is not None:
+            setattr(grid, option, value)
+    context = {} if scene == bpy.context.scene else {"scene": scene, "view_layer": scene.view_layers[0]}
+    try:
+        with bpy.context.temp_override(**context):
+            result = bpy.ops.object.lfprobe_place_for_views(grid=grid_obj.name,
+                                                            cameras=[{"name": n} for n in args.views or ()])
+    except RuntimeError as error:  # the operator's ERROR report
+        raise BatchError(str(error).strip(), EXIT_BAD_INPUT) from error
+    if result != {"FINISHED"}:
+        raise BatchError(f"adding probes to grid '{grid_obj.name}' was cancelled", EXIT_CANCELLED)
+    print(f"lfprobe: grid '{grid_obj.name}': {place_views.summary_line(grid.placement())}")
+    print(f"lfprobe: probe set in {grid_module.probe_dir_abspath(grid_obj)}")
+    if not args.no_save:
+        if not bpy.data.filepath:
+            raise BatchError("the scene is not saved to a .blend: pass --no-save or open a saved .blend")
+        bpy.ops.wm.save_mainfile()
+        print(f"lfprobe: saved {bpy.data.filepath}")
+    return EXIT_OK
+
+
 def _cmd_render(package, args) -> int:
     camera_export = _blender_module(package, "camera_export")
     probe_view = _blender_module(package, "probe_view")
@@ -271,6 +327,26 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--grid", default="", metavar="NAME", help="bake only this grid (default: every grid)")
     bake.add_argument("--no-save", action="store_true", help="do not save the .blend afterwards")
     bake.set_defaults(run=_cmd_bake)
+
+    place = sub.add_parser(
+        "place", help="bake a grid and add probes where views trace UNKNOWN; save the .blend",
+        description="Add Probes for Views: bakes the grid, then adds a probe at the eye of the view "
+                    "with the most UNKNOWN pixels, again and again, until every view is at most "
+                    "--target-unknown UNKNOWN, the next probe would exceed --budget-mib, or "
+                    "--max-added probes were added. Options left out keep the grid's settings.")
+    views = place.add_mutually_exclusive_group(required=True)
+    views.add_argument("--views", nargs="+", metavar="CAMERA", help="camera objects whose views to serve")
+    views.add_argument("--camera-path", action="store_true",
+                       help="the scene camera over the scene's frame range, a view every --frame-step frames")
+    place.add_argument("--frame-step", type=int, default=None, metavar="K", help="with --camera-path: every K frames")
+    place.add_argument("--grid", default="", metavar="NAME", help="probe grid (default: the scene's only grid)")
+    place.add_argument("--target-unknown", type=float, default=None, metavar="F",
+                       help="stop when every view has at most this fraction of UNKNOWN pixels (grid default 0.01)")
+    place.add_argument("--budget-mib", type=float, default=None, metavar="M",
+                       help="memory budget of the whole probe set in MiB (0: none)")
+    place.add_argument("--max-added", type=int, default=None, metavar="N", help="most probes added")
+    place.add_argument("--no-save", action="store_true", help="do not save the .blend afterwards")
+    place.set_defaults(run=_cmd_place)
 
     render = sub.add_parser("render", help="trace a camera's view through the baked probes into an EXR")
     render.add_argument("--camera", default="", metavar="NAME", help="camera object (default: the scene camera)")

@@ -171,6 +171,46 @@ def write_box_room_xyz(path: str, pitch: float = 0.1) -> int:
     return len(p)
 
 
+# The partitioned room of write_partitioned_room_xyz (as tests/python/test_adaptive.py's): the
+# box room with a 5 cm partition at x = 1 from the wall y = −1.5 to y = 0.3, which hides the
+# corner x > 1.05, y < 0.3 from the half x < 1 (where the scanner stands).
+PARTITION_SCANNER = (-1.0, 0.0, 1.25)
+
+
+def write_partitioned_room_xyz(path: str, pitch: float = 0.04, offset=(0.0, 0.0, 0.0)) -> int:
+    """The partitioned room, every surface sampled on a square pattern of `pitch` metres (a
+    merged, complete scan), as an 'x y z r g b' scan with the scanner at PARTITION_SCANNER;
+    `offset` is added to every coordinate (a georeferenced file). Returns the point count."""
+    import numpy as np
+
+    def panel(axis, value, u_range, v_range, step):
+        u_axis, v_axis = [a for a in range(3) if a != axis]
+        uu, vv = np.meshgrid(np.arange(*u_range, step), np.arange(*v_range, step), indexing="ij")
+        p = np.zeros((uu.size, 3))
+        p[:, axis], p[:, u_axis], p[:, v_axis] = value, uu.ravel(), vv.ravel()
+        return p
+
+    lo, hi = np.array(BOX_ROOM_MIN), np.array(BOX_ROOM_MAX)
+    chunks = []
+    for axis in range(3):
+        u, v = [a for a in range(3) if a != axis]
+        for wall in (lo[axis], hi[axis]):
+            chunks.append(panel(axis, wall, (lo[u], hi[u]), (lo[v], hi[v]), pitch))
+    for x in (1.0, 1.05):
+        chunks.append(panel(0, x, (-1.5, 0.3), (0.0, 2.5), pitch))
+    chunks.append(panel(1, 0.3, (1.0, 1.05 + 1e-9), (0.0, 2.5), pitch / 2))
+    p = np.concatenate(chunks)
+    rgb = np.column_stack([(p[:, 0] + 2) * 60, (p[:, 1] + 1.5) * 80, p[:, 2] * 100]).astype(int)
+    scanner = np.asarray(PARTITION_SCANNER) + np.asarray(offset, dtype=float)
+    np.savetxt(
+        path,
+        np.column_stack([p + np.asarray(offset, dtype=float), rgb]),
+        fmt=["%.4f"] * 3 + ["%d"] * 3,
+        header=f"scanner {scanner[0]} {scanner[1]} {scanner[2]}\nx y z r g b",
+    )
+    return len(p)
+
+
 def srgb_to_linear(value_8bit: float) -> float:
     c = value_8bit / 255.0
     return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4

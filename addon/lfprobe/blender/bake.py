@@ -25,6 +25,30 @@ class BakeInputError(ValueError):
     """The grid cannot be baked as it is; the message says why and what to do."""
 
 
+# The jobs that write a grid's probe folder (Bake, Add Probes for Views): one at a time, as two
+# would share the cores and could write the same folder.
+GRID_JOB_LABELS = ("Probe bake", "Adding probes for views")
+
+
+def grid_job_running() -> bool:
+    return any(label in job_modal.running_labels for label in GRID_JOB_LABELS)
+
+
+def grid_object(context, name: str = ""):
+    """The probe grid named `name`, else the active object; BakeInputError when it is not a grid."""
+    if name:
+        obj = bpy.data.objects.get(name)
+        if obj is None:
+            raise BakeInputError(f"no object named {name!r}")
+    else:
+        obj = context.active_object
+        if obj is None:
+            raise BakeInputError("no active object: select a probe grid to bake")
+    if not grid_module.is_grid(obj):
+        raise BakeInputError(f"{obj.name!r} is not a probe grid")
+    return obj
+
+
 def _is_identity(matrix) -> bool:
     return all(abs(matrix[r][c] - (1.0 if r == c else 0.0)) < 1e-9 for r in range(4) for c in range(4))
 
@@ -105,33 +129,86 @@ def _scan_cloud(loaded, scans):
     )
 
 
+class GridBake:
+    """What baking a grid takes, read from the grid and checked before any work starts (Bake and
+    Add Probes for Views share it): the sources, the probe folder and its staging folder, the
+    frame (world = offset + Blender position: the scans' frame, else the scene's for meshes),
+    the grid in world coordinates and the bake options. Raises BakeInputError or GridError."""
+
+    def __init__(self, context, grid_obj):
+        low, high = grid_module.grid_box(grid_obj)
+        self.scans, self.meshes = gather_sources(grid_obj)
+        self.folder = probe_folder(grid_obj)
+        frame = shared_scan_offset(self.scans) if self.scans else scan_object.frame_offset(context.scene)
+        self.grid_name = grid_obj.name
+        self.staging = self.folder.rstrip(os.sep) + ".baking"
+        self.offset = np.asarray(frame if frame is not None else (0.0, 0.0, 0.0), dtype=float)
+        grid = grid_obj.lfprobe_grid
+        self.placement = pipeline.ProbePlacementSpec(
+            grid_min=list(low + self.offset), grid_max=list(high + self.offset), counts=list(grid.counts)
+        )
+        self.options = pipeline.BakeOptions(resolution=grid.resolution)
+        if grid.plan_from_data:
+            # The grid's resolution is the largest a planned probe may get.
+            self.options.plan = {"auto_resolution": True, "max_resolution": int(grid.resolution),
+                                 "min_resolution": min(64, int(grid.resolution))}
+        self.paths = [p for obj in self.scans for p in obj.lfprobe_scan.paths()]
+        self.scanners = [s for obj in self.scans for s in obj.lfprobe_scan.scanners()]
+
+    def start_load(self):
+        """The native job that reads the scans' full clouds (through the parse cache)."""
+        # Scanner positions travel with the files (headers) or were given at import.
+        given = (self.scanners if len(self.scanners) == len(self.paths) and all(s is not None for s in self.scanners)
+                 else [])
+        return native.load().start_load_scans(
+            self.paths, scanners=given, world_offset=list(self.offset), cache_dir=default_cache_dir()
+        )
+
+    def cloud_and_sources(self, loaded):
+        """(the cloud to bake, moved by the scan objects' transforms; the manifest's sources)."""
+        cloud = _scan_cloud(loaded, self.scans)
+        sources = [
+            describe_scan(path, scan["points"], None if scan["scanner"] is None else list(np.add(scan["scanner"], self.offset)))
+            for path, scan in zip(self.paths, loaded.scans)
+        ]
+        return cloud, sources
+
+
+def install_probe_set(staging: str, folder: str) -> None:
+    """Puts the finished probe set in `staging` in place of the one in `folder` (renames, never
+    half a set)."""
+    old = folder.rstrip(os.sep) + ".old"
+    shutil.rmtree(old, ignore_errors=True)
+    if os.path.exists(folder):
+        os.rename(folder, old)
+    os.rename(staging, folder)
+    shutil.rmtree(old, ignore_errors=True)
+
+
+def show_baked_set(grid, manifest: dict, base_probes: int = -1) -> None:
+    """Marks the grid as baked with the coverage and plan of its grid probes (the first
+    `base_probes` of the manifest, all when negative); probes added for views, if any, are the
+    caller's to record (placement_json), and a plain bake clears them."""
+    probes = manifest["probes"] if base_probes < 0 else manifest["probes"][:base_probes]
+    grid.coverage_json = json.dumps([p.get("coverage", {}) for p in probes])
+    grid.plan_json = json.dumps(manifest.get("bake", {}).get("plan", []))
+    grid.placement_json = "{}"
+    grid.baked = True
+
+
 class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
     """Bake the probe grid's light field probes from its sources (Esc cancels)"""
 
     bl_idname = "object.lfprobe_bake"
     bl_label = "Bake Probes"
     bl_options = {"REGISTER"}
-    job_label = "Probe bake"
+    job_label = GRID_JOB_LABELS[0]
 
     grid: StringProperty(name="Grid", description="Name of the grid object (empty: the active object)", default="")
 
     @classmethod
     def poll(cls, context):
-        # One bake at a time: two would share the cores and could write the same folder.
-        return cls.job_label not in job_modal.running_labels
-
-    def _grid_object(self, context):
-        if self.grid:
-            obj = bpy.data.objects.get(self.grid)
-            if obj is None:
-                raise BakeInputError(f"no object named {self.grid!r}")
-        else:
-            obj = context.active_object
-            if obj is None:
-                raise BakeInputError("no active object: select a probe grid to bake")
-        if not grid_module.is_grid(obj):
-            raise BakeInputError(f"{obj.name!r} is not a probe grid")
-        return obj
+        return not grid_job_running()
 
     def execute(self, context):
         return self.run_job(context)
@@ -139,54 +216,31 @@ class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
     def start_job(self, context):
         self._staging = None
         try:
-            _native = native.load()
-            grid_obj = self._grid_object(context)
-            low, high = grid_module.grid_box(grid_obj)
-            scans, meshes = gather_sources(grid_obj)
-            folder = probe_folder(grid_obj)
-            # World = offset + Blender position: the scans' frame, else the scene's (meshes).
-            frame = shared_scan_offset(scans) if scans else scan_object.frame_offset(context.scene)
+            native.load()
+            inputs = GridBake(context, grid_object(context, self.grid))
         except (BakeInputError, grid_module.GridError, native.NativeModuleError) as error:
             self.report({"ERROR"}, f"Probe bake: {error}")
             return None
-        self._grid_name = grid_obj.name
-        self._scans = scans
-        self._folder = folder
-        self._staging = folder.rstrip(os.sep) + ".baking"
-        self._offset = np.asarray(frame if frame is not None else (0.0, 0.0, 0.0), dtype=float)
-        grid = grid_obj.lfprobe_grid
-        self._placement = pipeline.ProbePlacementSpec(
-            grid_min=list(low + self._offset), grid_max=list(high + self._offset), counts=list(grid.counts)
-        )
-        self._options = pipeline.BakeOptions(resolution=grid.resolution)
-        if grid.plan_from_data:
-            # The grid's resolution is the largest a planned probe may get.
-            self._options.plan = {"auto_resolution": True, "max_resolution": int(grid.resolution),
-                                  "min_resolution": min(64, int(grid.resolution))}
+        self._inputs = inputs
+        self._staging = inputs.staging
         shutil.rmtree(self._staging, ignore_errors=True)  # left by a crashed Blender
-        if meshes:
-            if grid.plan_from_data:
+        if inputs.meshes:
+            if inputs.options.plan is not None:
                 self.report({"ERROR"}, "Probe bake: Plan From Data works from scan points; "
                                        "turn it off for mesh sources")
                 return None
-            return self._start_mesh_bake(context, meshes)
-        paths = [p for obj in scans for p in obj.lfprobe_scan.paths()]
-        scanners = [s for obj in scans for s in obj.lfprobe_scan.scanners()]
-        self._paths = paths
+            return self._start_mesh_bake(context, inputs.meshes)
         self._step = "load"
-        # Scanner positions travel with the files (headers) or were given at import.
-        given = scanners if len(scanners) == len(paths) and all(s is not None for s in scanners) else []
-        return _native.start_load_scans(
-            paths, scanners=given, world_offset=list(self._offset), cache_dir=default_cache_dir()
-        )
+        return inputs.start_load()
 
     def _start_mesh_bake(self, context, meshes):
         from . import mesh_export  # engineer B's module: Blender meshes → native Mesh
 
         _native = native.load()
+        inputs = self._inputs
         try:
             mesh = mesh_export.native_mesh_from_objects(
-                meshes, context.evaluated_depsgraph_get(), world_offset=list(self._offset)
+                meshes, context.evaluated_depsgraph_get(), world_offset=list(inputs.offset)
             )
         except mesh_export.MeshExportError as error:
             self.report({"ERROR"}, f"Probe bake: {error}")
@@ -196,51 +250,36 @@ class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
         return _native.start_bake_probe_set_from_mesh(
             mesh,
             self._staging,
-            resolution=self._options.resolution,
-            grid_min=self._placement.grid_min,
-            grid_max=self._placement.grid_max,
-            counts=self._placement.counts,
+            resolution=inputs.options.resolution,
+            grid_min=inputs.placement.grid_min,
+            grid_max=inputs.placement.grid_max,
+            counts=inputs.placement.counts,
             sources_json=json.dumps(sources),
         )
 
     def finish_job(self, context, result):
+        inputs = self._inputs
         if self._step == "load":
-            cloud = _scan_cloud(result, self._scans)
-            sources = [
-                describe_scan(path, scan["points"], None if scan["scanner"] is None else list(np.add(scan["scanner"], self._offset)))
-                for path, scan in zip(self._paths, result.scans)
-            ]
+            cloud, sources = inputs.cloud_and_sources(result)
             self._step = "bake"
             return pipeline.bake_from_cloud(
-                cloud, self._staging, self._placement, self._options, sources, start_only=True
+                cloud, self._staging, inputs.placement, inputs.options, sources, start_only=True
             )
-        self._install()
-        manifest = read_manifest(self._folder)
-        grid_obj = bpy.data.objects.get(self._grid_name)
+        install_probe_set(self._staging, inputs.folder)
+        self._staging = None
+        manifest = read_manifest(inputs.folder)
+        grid_obj = bpy.data.objects.get(inputs.grid_name)
         if grid_obj is None or not grid_module.is_grid(grid_obj):
-            self.report({"WARNING"}, f"Baked into {self._folder}, but grid {self._grid_name!r} was removed meanwhile")
+            self.report({"WARNING"}, f"Baked into {inputs.folder}, but grid {inputs.grid_name!r} was removed meanwhile")
             return {"FINISHED"}
-        grid = grid_obj.lfprobe_grid
-        grid.coverage_json = json.dumps([p.get("coverage", {}) for p in manifest["probes"]])
-        grid.plan_json = json.dumps(manifest.get("bake", {}).get("plan", []))
-        grid.baked = True
+        show_baked_set(grid_obj.lfprobe_grid, manifest)
         mean = result.get("mean_coverage", {})
         self.report(
             {"INFO"},
-            f"Baked {len(manifest['probes'])} probes into {self._folder}: "
+            f"Baked {len(manifest['probes'])} probes into {inputs.folder}: "
             f"{100 * mean.get('surface', 0):.0f}% surface, {100 * mean.get('unknown', 0):.0f}% unknown",
         )
         return {"FINISHED"}
-
-    def _install(self):
-        """Puts the finished probe set in place of the old one (renames, never half a set)."""
-        old = self._folder.rstrip(os.sep) + ".old"
-        shutil.rmtree(old, ignore_errors=True)
-        if os.path.exists(self._folder):
-            os.rename(self._folder, old)
-        os.rename(self._staging, self._folder)
-        self._staging = None
-        shutil.rmtree(old, ignore_errors=True)
 
     def cleanup_job(self, context):
         if getattr(self, "_staging", None):

@@ -1,9 +1,12 @@
 """Running a native Job from an operator: in the UI a modal operator polls the Job on a
 window-manager timer (the work runs on native threads, so the UI stays responsive), shows a
 progress bar and status text, and Esc cancels; headless (``blender -b``) it runs to the end
-synchronously, printing progress."""
+synchronously, printing progress. ThreadJob gives Python work that chains native calls the
+same interface, on a thread of its own."""
 
 from __future__ import annotations
+
+import threading
 
 import bpy
 
@@ -27,17 +30,16 @@ class NativeJobOperator:
     _job = None
     _timer = None
 
-    def start_job(self, context):
-        raise NotImplementedError
-
-    def finish_job(self, context, result):
-        raise NotImplementedError
-
     def cleanup_job(self, context):
         pass
 
     def run_job(self, context):
         """Starts the job; modal in the UI, synchronous in the background."""
+        for hook in ("start_job", "finish_job"):
+            # The mix-in's contract: an operator class that forgot a hook is a programming
+            # error, said plainly instead of an AttributeError from deep in the modal loop.
+            if not callable(getattr(self, hook, None)):
+                raise TypeError(f"{type(self).__name__} uses NativeJobOperator without {hook}()")
         job = self.start_job(context)
         if job is None:
             self.cleanup_job(context)
@@ -115,3 +117,76 @@ class NativeJobOperator:
         else:
             self._job = outcome
         return outcome
+
+
+class ThreadJob:
+    """A Job with the native Job's interface (fraction, stage, done, cancel, wait, result, run)
+    whose work is a Python function on a thread of its own: for work that chains native calls
+    from Python, such as adaptive placement (bake, trace every view, bake again). The function
+    is called as work(report) and must not touch bpy; report(fraction, stage) returns False once
+    cancel() was asked, and the work then stops with the native Cancelled (native calls given
+    report as their progress callback do that themselves)."""
+
+    def __init__(self, work, name: str = "lfprobe job"):
+        self.fraction = 0.0
+        self.stage = "starting"
+        self._cancelled = threading.Event()
+        self._finished = threading.Event()
+        self._value = None
+        self._error = None
+        self._taken = False
+        self._thread = threading.Thread(target=self._main, args=(work,), name=name, daemon=True)
+        self._thread.start()
+
+    def _report(self, fraction: float, stage: str) -> bool:
+        self.fraction = float(fraction)
+        self.stage = str(stage)
+        return not self._cancelled.is_set()
+
+    def _main(self, work):
+        try:
+            self._value = work(self._report)
+        except BaseException as error:  # handed to result(), on the caller's thread
+            self._error = error
+        finally:
+            self._finished.set()
+
+    @property
+    def done(self) -> bool:
+        return self._finished.is_set()
+
+    def cancel(self) -> None:
+        self._cancelled.set()
+
+    def wait(self, seconds: float = -1.0) -> bool:
+        return self._finished.wait(None if seconds < 0 else seconds)
+
+    def result(self):
+        """The work's return value, or its exception raised again. Waits when not done."""
+        self.wait()
+        self._thread.join()
+        if self._error is not None:
+            error, self._error = self._error, None
+            raise error
+        if self._taken:
+            raise RuntimeError("the job's result was already taken")
+        self._taken = True
+        return self._value
+
+    def run(self, callback=None):
+        """Runs to the end from the calling thread as the native Job.run does: calls
+        callback(fraction, stage) at once and then every 0.1 s, cancels when it returns False or
+        raises (Ctrl-C too)."""
+        try:
+            while True:
+                if callback is not None and callback(self.fraction, self.stage) is False:
+                    self.cancel()
+                if self.wait(POLL_SECONDS):
+                    break
+        except BaseException:
+            self.cancel()
+            self.wait()
+            raise
+        if callback is not None:
+            callback(1.0, "done")
+        return self.result()

@@ -1,6 +1,7 @@
 """The viewport overlay of probe grids: each probe as a point coloured by its coverage after
-baking (green: every direction measured, red: mostly unknown; grey before baking) and the
-grid's cell lines, drawn over the scene (the probes sit inside rooms, behind the walls).
+baking (green: every direction measured, red: mostly unknown; grey before baking; planned
+probes moved blue, dropped black; probes added for views magenta) and the grid's cell lines,
+drawn over the scene (the probes sit inside rooms, behind the walls).
 register() also starts the coloured drawing of scan clouds (scan_display). The geometry is plain numpy (testable headless); drawing uses only the
 gpu module calls that Blender 3.4 and 5.x share, with builtin shader names picked at run time."""
 
@@ -53,6 +54,18 @@ def plan_colours(colours: np.ndarray, plan: list) -> np.ndarray:
     return out
 
 
+# Probes that Add Probes for Views put at the eyes of views (place_views.py): not on the grid,
+# and in none of the coverage colours (whose blue stays low) nor the plan's.
+ADDED_COLOUR = (1.0, 0.2, 1.0, 1.0)
+
+
+def added_probes(obj) -> np.ndarray:
+    """Positions (n, 3) in Blender's frame of the probes added for views, from the grid's
+    placement record."""
+    added = obj.lfprobe_grid.placement().get("added", [])
+    return np.array([a["position"] for a in added], dtype=np.float64).reshape(-1, 3)
+
+
 def cell_lines(obj) -> np.ndarray:
     """Line segment end points (2k, 3) of the grid's cells: every row of probes along each axis."""
     positions = grid_module.probe_positions(obj)
@@ -69,11 +82,15 @@ def cell_lines(obj) -> np.ndarray:
 
 
 def overlay_geometry(obj):
-    """(probe positions (n, 3), probe colours (n, 4), line end points (2k, 3)) as float32."""
+    """(probe positions (n, 3), probe colours (n, 4), line end points (2k, 3)) as float32: the
+    grid's probes first, then the probes added for views."""
     positions = grid_module.probe_positions(obj)
     colours = plan_colours(coverage_colours(obj.lfprobe_grid.coverage(), len(positions)),
                            obj.lfprobe_grid.plan())
-    return positions.astype(np.float32), colours, cell_lines(obj).astype(np.float32)
+    added = added_probes(obj)
+    positions = np.concatenate([positions, added])
+    colours = np.concatenate([colours, np.tile(np.asarray(ADDED_COLOUR, dtype=np.float32), (len(added), 1))])
+    return positions.astype(np.float32), colours.astype(np.float32), cell_lines(obj).astype(np.float32)
 
 
 def _builtin_shader(*names):
@@ -91,7 +108,8 @@ def _batches(obj):
     from gpu_extras.batch import batch_for_shader
 
     grid = obj.lfprobe_grid
-    key = (tuple(map(tuple, obj.matrix_world)), tuple(grid.counts), grid.coverage_json, grid.plan_json)
+    key = (tuple(map(tuple, obj.matrix_world)), tuple(grid.counts), grid.coverage_json, grid.plan_json,
+           grid.placement_json)
     cached = _batch_cache.get(obj.name)
     if cached is not None and cached[0] == key:
         return cached[1]

@@ -1,5 +1,6 @@
 """Object properties panels: a scan cloud's facts (points, world offset, files, scanners) and
-a probe grid's settings, sources, probe folder and bake state."""
+a probe grid's settings, sources, probe folder and bake state, with Add Probes for Views in a
+sub-panel."""
 
 from __future__ import annotations
 
@@ -10,6 +11,7 @@ import bpy
 
 from ..core import native
 from . import grid as grid_module
+from . import place_views
 
 
 def _native_problem(layout) -> None:
@@ -112,6 +114,9 @@ class LFPROBE_PT_grid(bpy.types.Panel):
                 size_text = f"{sizes[0]}²–{sizes[-1]}²" if sizes else "none kept"
                 layout.label(text=f"Plan: {moved} moved (blue), {dropped} dropped (black), maps {size_text}",
                              icon="INFO")
+            placement = grid.placement()
+            if placement:
+                layout.label(text=place_views.summary_line(placement, colour="magenta"), icon="INFO")
             counts = tuple(grid.counts)
             if len(coverage) != counts[0] * counts[1] * counts[2]:
                 layout.label(text="The counts changed since the bake: bake again", icon="INFO")
@@ -119,7 +124,36 @@ class LFPROBE_PT_grid(bpy.types.Panel):
             layout.label(text="Not baked")
 
 
-_CLASSES = (LFPROBE_PT_scan, LFPROBE_UL_grid_sources, LFPROBE_PT_grid)
+class LFPROBE_PT_grid_views(bpy.types.Panel):
+    bl_label = "Probes for Views"
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    bl_context = "object"
+    bl_parent_id = "LFPROBE_PT_grid"
+    bl_options = {"DEFAULT_CLOSED"}
+
+    @classmethod
+    def poll(cls, context):
+        return grid_module.is_grid(context.object)
+
+    def draw(self, context):
+        obj = context.object
+        grid = obj.lfprobe_grid
+        layout = self.layout
+        layout.use_property_split = True
+        layout.prop(grid, "views_from")
+        if grid.views_from == "CAMERA_PATH":
+            layout.prop(grid, "frame_step")
+        layout.prop(grid, "target_unknown")
+        layout.prop(grid, "budget_mib")
+        layout.prop(grid, "max_added")
+        layout.operator("object.lfprobe_place_for_views", icon="OUTLINER_OB_CAMERA").grid = obj.name
+        placement = grid.placement()
+        if grid.baked and placement:
+            layout.label(text=f"Stopped: {placement.get('stopped_because', '')}")
+
+
+_CLASSES = (LFPROBE_PT_scan, LFPROBE_UL_grid_sources, LFPROBE_PT_grid, LFPROBE_PT_grid_views)
 
 
 def register():

@@ -12,6 +12,8 @@ import bpy
 from bpy.props import (
     BoolProperty,
     CollectionProperty,
+    EnumProperty,
+    FloatProperty,
     FloatVectorProperty,
     IntProperty,
     IntVectorProperty,
@@ -122,6 +124,56 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
         description="Per-probe plan after a planned bake (JSON list: class, moved, dropped, resolution)",
         default="[]",
     )
+    # Add Probes for Views (place_views.py): probes at the eyes of the views that trace the most
+    # UNKNOWN, added to the grid's probes until a target or a memory budget.
+    views_from: EnumProperty(
+        name="Views",
+        description="The views that Add Probes for Views serves",
+        items=(
+            ("SELECTED", "Selected Cameras", "The selected camera objects, each at the current frame"),
+            ("CAMERA_PATH", "Scene Camera Path",
+             "The scene camera over the scene's frame range, one view every Frame Step frames"),
+        ),
+        default="SELECTED",
+    )
+    frame_step: IntProperty(
+        name="Frame Step",
+        description="Scene Camera Path: one view every this many frames from the scene's start frame",
+        min=1,
+        soft_max=250,
+        default=10,
+    )
+    target_unknown: FloatProperty(
+        name="Target UNKNOWN",
+        description="Stop adding probes when every view traces at most this fraction of its pixels "
+        "UNKNOWN (no probe knows what is there)",
+        min=0.0,
+        max=1.0,
+        precision=3,
+        step=1,
+        default=0.01,
+    )
+    budget_mib: FloatProperty(
+        name="Memory Budget (MiB)",
+        description="Add no probe that would take the whole probe set (loaded maps and coarse "
+        "levels) over this many MiB; 0: no budget",
+        min=0.0,
+        soft_max=65536.0,
+        default=0.0,
+    )
+    max_added: IntProperty(
+        name="Max Added Probes",
+        description="The most probes Add Probes for Views adds to the grid's probes",
+        min=1,
+        soft_max=256,
+        default=16,
+    )
+    placement_json: StringProperty(
+        name="Probes for Views",
+        description="What Add Probes for Views did (JSON: added probes in Blender's frame, UNKNOWN "
+        "before and after, memory, why it stopped); {} after a plain bake",
+        default="{}",
+    )
     baked: BoolProperty(name="Baked", default=False)
     coverage_json: StringProperty(
         name="Coverage",
@@ -134,6 +186,13 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
             return list(json.loads(self.plan_json or "[]"))
         except ValueError:
             return []
+
+    def placement(self) -> dict:
+        try:
+            value = json.loads(self.placement_json or "{}")
+        except ValueError:
+            return {}
+        return value if isinstance(value, dict) else {}
 
     def coverage(self) -> list:
         try:

@@ -20,9 +20,13 @@ from typing import Callable, Dict, List, Optional, Sequence
 import numpy as np
 
 from . import native
+from .pipeline import BakeOptions, Progress, ProbePlacementSpec, bake_from_cloud
 from .probe_set import MANIFEST, coarse_level_bytes, read_manifest
 
 UNKNOWN = 2  # the render's status channel: 0 MISS, 1 HIT, 2 UNKNOWN
+# Why the greedy loop stopped: every view at the target, the next probe over the budget, the
+# limit of added probes reached, every view above the target already with a probe at its eye.
+STOP_REASONS = ("target", "budget", "max_added", "eyes_used")
 DEFAULT_TRACE = {"mode": "auto", "thickness": 0.02}
 Log = Optional[Callable[[str], object]]
 
@@ -30,12 +34,14 @@ Log = Optional[Callable[[str], object]]
 @dataclass
 class AdaptiveResult:
     """What the greedy loop did: the probes it added (world positions), one record per
-    iteration (probes, memory, UNKNOWN rate per view) and why it stopped."""
+    iteration (probes, memory, UNKNOWN rate per view) and why it stopped: `stopped_because` in
+    words, `stop` as one of STOP_REASONS (for a caller that words it its own way)."""
     folder: str
     base_probes: int
     added: List[Dict[str, object]] = field(default_factory=list)
     iterations: List[Dict[str, object]] = field(default_factory=list)
     stopped_because: str = ""
+    stop: str = ""
     memory_bytes: int = 0
     bake_seconds: float = 0.0
 
@@ -45,7 +51,7 @@ class AdaptiveResult:
 
     def as_dict(self) -> Dict[str, object]:
         return {"folder": self.folder, "base_probes": self.base_probes, "added": self.added,
-                "iterations": self.iterations, "stopped_because": self.stopped_because,
+                "iterations": self.iterations, "stopped_because": self.stopped_because, "stop": self.stop,
                 "memory_bytes": self.memory_bytes, "bake_seconds": self.bake_seconds}
 
 
@@ -132,6 +138,8 @@ def place_adaptively(
     splat_scale: float = 0.8,
     hole_fill_texels: int = 4,
     log: Log = None,
+    sources: Sequence[dict] = (),
+    progress: Progress = None,
 ) -> AdaptiveResult:
     """Greedy placement into `folder` (a probe set that ends up holding the base and the added
     probes). cameras: camera dicts (DESIGN.md §3, world coordinates). base_grid: {"min", "max",
@@ -139,7 +147,10 @@ def place_adaptively(
     `plan` (options of start_bake_planned_probe_set) each new probe is planned from the data.
     Stops when every view's UNKNOWN rate is ≤ target_unknown, when the next probe would take the
     set over budget_bytes (loaded maps and coarse levels), after max_added probes, or when every
-    view that is still above the target already has a probe at its eye."""
+    view that is still above the target already has a probe at its eye. sources: the manifest's
+    source records (lfprobe.core.sources.describe_scan). progress(fraction, stage) is called
+    through every bake and between traces; when it returns False the work stops with
+    Cancelled (folder is then left half made: the caller bakes into a staging folder)."""
     _native = native.load()
     if not cameras:
         raise ValueError("adaptive placement needs at least one view (camera)")
@@ -156,23 +167,25 @@ def place_adaptively(
         shutil.rmtree(folder)
     os.makedirs(folder)
     work = folder.rstrip(os.sep) + ".adding"
-    bake_kwargs = dict(splat_scale=splat_scale, hole_fill_texels=hole_fill_texels)
+    options = BakeOptions(resolution=int(resolution), splat_scale=splat_scale,
+                          hole_fill_texels=hole_fill_texels, plan=plan)
 
-    def bake_into(target: str, positions=(), grid=None) -> dict:
+    def step(fraction: float, stage: str):
+        if progress is not None and progress(fraction, stage) is False:
+            raise _native.Cancelled(f"adaptive placement cancelled ({stage})")
+        return True
+
+    def bake_into(target: str, positions=(), grid=None, stage: str = "") -> dict:
         grid = grid or {}
-        if plan is not None:
-            options = {"resolution": int(resolution), **bake_kwargs, **plan}
-            return _native.start_bake_planned_probe_set(
-                cloud, target, positions=[list(map(float, p)) for p in positions],
-                grid_min=grid.get("min"), grid_max=grid.get("max"), counts=grid.get("counts"),
-                options=options).run()
-        return _native.start_bake_probe_set(
-            cloud, target, resolution=int(resolution), positions=[list(map(float, p)) for p in positions],
-            grid_min=grid.get("min"), grid_max=grid.get("max"), counts=grid.get("counts"), **bake_kwargs).run()
+        placement = ProbePlacementSpec(positions=list(positions), grid_min=grid.get("min"),
+                                       grid_max=grid.get("max"), counts=grid.get("counts"))
+        # The native bake stops on the callback's False and raises Cancelled itself.
+        relay = None if progress is None else (lambda f, s: progress(f, f"{stage}: {s}"))
+        return bake_from_cloud(cloud, target, placement, options, sources, progress=relay)
 
     result = AdaptiveResult(folder=os.path.abspath(folder), base_probes=0)
     if base_grid is not None or base_positions:
-        summary = bake_into(folder, base_positions, base_grid)
+        summary = bake_into(folder, base_positions, base_grid, stage="base probes")
         result.bake_seconds += summary["bake_seconds"] + summary.get("normals_seconds", 0.0)
         grown = _GrowingSet(folder, read_manifest(folder))
         result.base_probes = len(grown.probes)
@@ -182,7 +195,8 @@ def place_adaptively(
         while True:
             field_ = _native.ProbeField.load(folder) if grown.probes else None
             rates, unknown_pixels, seconds = [], [], 0.0
-            for text, camera in zip(texts, cameras):
+            for index, (text, camera) in enumerate(zip(texts, cameras)):
+                step(index / len(cameras), f"tracing {len(cameras)} view(s) through {len(grown.probes)} probe(s)")
                 if field_ is None:  # nothing baked yet: every pixel is unknown
                     w, h = camera["resolution"]
                     rates.append(1.0)
@@ -204,9 +218,11 @@ def place_adaptively(
             del field_
             if max(rates) <= target_unknown:
                 result.stopped_because = f"every view at most {target_unknown:.2%} UNKNOWN"
+                result.stop = "target"
                 break
             if len(result.added) >= max_added:
                 result.stopped_because = f"{max_added} probes added (the limit)"
+                result.stop = "max_added"
                 break
             # The worst view whose eye has no probe yet: a probe at an eye that already has one
             # would change nothing.
@@ -215,16 +231,19 @@ def place_adaptively(
                           and not any(math.dist(eyes[i], a["eye"]) < 1e-6 for a in result.added)), None)
             if worst is None:
                 result.stopped_because = "every view above the target already has a probe at its eye"
+                result.stop = "eyes_used"
                 break
             if os.path.exists(work):
                 shutil.rmtree(work)
-            summary = bake_into(work, [eyes[worst]])
+            summary = bake_into(work, [eyes[worst]], stage=f"probe {len(result.added) + 1} at the eye of view "
+                                                            f"{worst + 1} ({rates[worst]:.1%} UNKNOWN)")
             candidate_set = read_manifest(work)
             candidate = candidate_set["probes"][0]
             cost = probe_memory_bytes(candidate)
             if budget_bytes is not None and memory + cost > budget_bytes:
                 result.stopped_because = (f"the next probe ({cost / 2**20:.2f} MiB) would exceed the budget "
                                           f"({budget_bytes / 2**20:.2f} MiB; {memory / 2**20:.2f} MiB used)")
+                result.stop = "budget"
                 break
             result.bake_seconds += summary["bake_seconds"] + summary.get("normals_seconds", 0.0)
             # A planned probe may have been moved off a wall: record where it went (world).
