@@ -63,6 +63,7 @@ public:
         perp2_ = glm::dot(closest, closest);
         origin_length_ = glm::length(o_);
         texel_scale_ = settings.thickness_texels * kTexelAngleTimesN / static_cast<double>(n_);
+        two_over_n_ = 2.0 / static_cast<double>(n_);
         if (levels != nullptr && settings.use_coarse_levels && texel_scale_ < 1.0) {
             levels_ = &levels->levels();
             level_count_ = std::min(static_cast<int>(levels_->size()), kMaxLevels);
@@ -241,7 +242,8 @@ private:
     // +inf when the ray meets that plane outside this octant (the other branch of p(t)).
     [[nodiscard]] double plane_crossing(const OctantMap& m, const OctantCoordinate& c,
                                         int edge) const {
-        const double a = 2.0 * static_cast<double>(edge) / static_cast<double>(n_) - 1.0;
+        // A product, not a quotient: exact for power-of-two N, and this is the walk's hot path.
+        const double a = static_cast<double>(edge) * two_over_n_ - 1.0;
         const double denominator = c.num1 - a * m.den1;
         if (denominator == 0.0) {
             return kInf;
@@ -428,6 +430,7 @@ private:
     double perp2_ = 0.0;
     double origin_length_ = 0.0;
     double texel_scale_ = 0.0;
+    double two_over_n_ = 0.0;
     double piece_start_ = 0.0;
     NearMiss near_miss_;
     ProbeTraceResult result_;
@@ -465,15 +468,72 @@ double surface_thickness(const TraceSettings& settings, double distance, int n) 
 
 namespace {
 
-// The lookup for a unit direction `d` whose inputs are already checked.
+// The lookup for a unit direction `d` whose inputs are already checked: the walk's judgement
+// of one texel (Tracer::visit_texel) with the origin at the probe centre, where the ray's
+// distance from the probe at parameter t is |t|, written out because it is the whole cost of
+// an eye-at-probe view.
 ProbeTraceResult lookup_unit_direction(const ProbeMap& map, const glm::dvec3& d, double t_min,
                                        double t_max, const TraceSettings& settings) {
-    Tracer tracer(map, nullptr, glm::dvec3(0.0), d, settings);
-    const oct::Texel texel = oct::texel_of_direction(glm::vec3(d), map.resolution);
-    if (!(t_max > t_min) || !tracer.visit_texel(texel.x, texel.y, t_min, t_max)) {
-        tracer.finish_miss(t_max);
+    ProbeTraceResult result;
+    const auto miss = [&] {
+        result.status = TraceStatus::Miss;
+        result.t = kInf;
+        result.free_until = t_max;
+        result.texel = {-1, -1};
+        return result;
+    };
+    if (!(t_max > t_min)) {
+        return miss();
     }
-    return tracer.result();
+    const int n = map.resolution;
+    const oct::Texel texel = oct::texel_of_direction(glm::vec3(d), n);
+    const auto unknown = [&] {
+        result.status = TraceStatus::Unknown;
+        result.t = kInf;
+        result.free_until = t_min;
+        result.texel = texel;
+        return result;
+    };
+    result.fine_steps = 1;
+    const double far = std::isfinite(t_max) ? std::max(std::abs(t_min), std::abs(t_max)) : kInf;
+    if (far <= settings.eye_at_probe_distance) {
+        return miss(); // within the ball around the centre nothing can be
+    }
+    const std::size_t i = oct::texel_index(texel, n);
+    const double r = static_cast<double>(map.distance_at(i));
+    if (std::isnan(r)) {
+        return unknown();
+    }
+    if (std::isinf(r) || far < r) {
+        return miss(); // empty, or the surface lies beyond t_max
+    }
+    const double near = std::abs(std::clamp(0.0, t_min, t_max));
+    if (near > r + surface_thickness(settings, r, n)) {
+        return unknown(); // the surface lies before t_min: what is behind it is not known
+    }
+    // Where the ray is at distance r; within the thickness only, the end nearest to it.
+    double t = r;
+    if (!(r >= t_min && r <= t_max)) {
+        double best_error = kInf;
+        for (const double candidate : {t_min, std::clamp(0.0, t_min, t_max), t_max}) {
+            const double error = std::abs(std::abs(candidate) - r);
+            if (std::isfinite(candidate) && error < best_error) {
+                best_error = error;
+                t = candidate;
+            }
+        }
+    }
+    const glm::vec3 normal = map.normal_at(i);
+    if (glm::dot(glm::dvec3(normal), d) > 0.0) {
+        return unknown(); // the back of a surface
+    }
+    result.status = TraceStatus::Hit;
+    result.t = t;
+    result.free_until = t;
+    result.texel = texel;
+    result.radiance = map.radiance_at(i);
+    result.normal = normal;
+    return result;
 }
 
 } // namespace

@@ -50,10 +50,11 @@ int probe_at(const ProbeField& field, const glm::dvec3& eye, const TraceSettings
 }
 
 // The eye probe's O(1) lookup, falling back to the whole field where it answers UNKNOWN.
+// Every camera ray starts at the eye, so the lookup needs no walk set-up at all.
 FieldTraceResult trace_from_eye_probe(const ProbeField& field, int eye_probe, const Ray& ray,
                                       const FieldTraceSettings& settings) {
     const ProbeTraceResult r =
-        field.trace_one(static_cast<std::size_t>(eye_probe), ray, settings.probe);
+        field.lookup_one(static_cast<std::size_t>(eye_probe), ray, settings.probe);
     if (r.status == TraceStatus::Unknown) {
         return field.trace(ray, settings);
     }
