@@ -2,7 +2,7 @@
 compare a saved scene.
 
     blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- import --scan FILE... [--grid-from EMPTY] --save-as OUT.blend
-    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- bake [--grid NAME]
+    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- bake [--grid NAME] [--storage full|compact]
     blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- place (--views CAMERA... | --camera-path)
     blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- render [--camera NAME] --out IMG.exr
     blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- compare --reference OBJ... --out DIR
@@ -160,10 +160,24 @@ def _cmd_import(package, args) -> int:
     return EXIT_OK
 
 
+def _store_storage_options(grid, args) -> None:
+    """--storage and --distance-step onto the grid (saved with it), as the panel would set them."""
+    if args.distance_step is not None:
+        # The property would clamp a step out of its range without a word.
+        limits = grid.bl_rna.properties["distance_step"]
+        if not limits.hard_min <= args.distance_step <= limits.hard_max:
+            raise BatchError(f"--distance-step must be from {limits.hard_min:g} to {limits.hard_max:g} metres, "
+                             f"got {args.distance_step}")
+        grid.distance_step = args.distance_step
+    if args.storage:
+        grid.storage = args.storage.upper()
+
+
 def _cmd_bake(package, args) -> int:
     import bpy
 
     grid_module = _blender_module(package, "grid")
+    bake = _blender_module(package, "bake")
     scene = _scene(args.scene)
     if args.grid:
         grid_obj = scene.objects.get(args.grid)
@@ -175,13 +189,15 @@ def _cmd_bake(package, args) -> int:
         if not grids:
             raise BatchError(f"scene '{scene.name}' has no probe grid to bake")
     for grid_obj in grids:
+        _store_storage_options(grid_obj.lfprobe_grid, args)
         try:
             result = bpy.ops.object.lfprobe_bake(grid=grid_obj.name)
         except RuntimeError as error:  # the operator's ERROR report
             raise BatchError(str(error).strip(), EXIT_BAD_INPUT) from error
         if result != {"FINISHED"}:
             raise BatchError(f"baking grid '{grid_obj.name}' was cancelled", EXIT_CANCELLED)
-        print(f"lfprobe: baked grid '{grid_obj.name}' into {grid_module.probe_dir_abspath(grid_obj)}")
+        folder = grid_module.probe_dir_abspath(grid_obj)
+        print(f"lfprobe: baked grid '{grid_obj.name}' into {folder}: loads {bake.memory_text(folder)}")
     if not args.no_save:
         if not bpy.data.filepath:
             raise BatchError("the scene is not saved to a .blend: pass --no-save or open a saved .blend")
@@ -225,6 +241,7 @@ def _cmd_place(package, args) -> int:
         value = getattr(args, option)
         if value is not None:
             setattr(grid, option, value)
+    _store_storage_options(grid, args)
     context = {} if scene == bpy.context.scene else {"scene": scene, "view_layer": scene.view_layers[0]}
     try:
         with bpy.context.temp_override(**context):
@@ -303,6 +320,15 @@ def _cmd_compare(package, args) -> int:
     return EXIT_OK
 
 
+def _add_storage_arguments(parser) -> None:
+    parser.add_argument("--storage", choices=["full", "compact"], default=None,
+                        help="how the probes load into memory (the files keep full precision): full "
+                             "(18 bytes a texel) or compact (7: 8-bit sRGB radiance, 16-bit distance, "
+                             "8+8-bit normals, no confidence); default: the grid's Storage")
+    parser.add_argument("--distance-step", type=float, default=None, metavar="M",
+                        help="compact: the distance quantum in metres (default: the grid's, 0.001)")
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="blender -b scene.blend --python-exit-code 1 -P cli.py --",
@@ -326,6 +352,7 @@ def build_parser() -> argparse.ArgumentParser:
     bake = sub.add_parser("bake", help="bake the scene's probe grids and save the .blend")
     bake.add_argument("--grid", default="", metavar="NAME", help="bake only this grid (default: every grid)")
     bake.add_argument("--no-save", action="store_true", help="do not save the .blend afterwards")
+    _add_storage_arguments(bake)
     bake.set_defaults(run=_cmd_bake)
 
     place = sub.add_parser(
@@ -346,6 +373,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="memory budget of the whole probe set in MiB (0: none)")
     place.add_argument("--max-added", type=int, default=None, metavar="N", help="most probes added")
     place.add_argument("--no-save", action="store_true", help="do not save the .blend afterwards")
+    _add_storage_arguments(place)
     place.set_defaults(run=_cmd_place)
 
     render = sub.add_parser("render", help="trace a camera's view through the baked probes into an EXR")

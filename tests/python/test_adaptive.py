@@ -119,6 +119,14 @@ def test_place_views_cli(room):
     data = json.loads(plan.read_text())
     assert data["added"][0]["position"] == pytest.approx(HIDDEN_EYE)
     assert len(read_manifest(str(probes))["probes"]) == 2
+    # Compact storage: every probe baked on the way records it, so the budget counts 7 bytes a texel.
+    compact = room["folder"] / "cli_compact"
+    run_cli("place", "--scan", room["scan"], "--scanner", *BASE_PROBE, "--probe", *BASE_PROBE,
+            "--views", *cams, "--target-unknown", 0.01, "--res", 64, "--out-probes", compact,
+            "--storage", "compact", "--no-cache", "--quiet", check=True)
+    manifest = read_manifest(str(compact))
+    assert manifest["storage"]["radiance"] == "srgb8" and len(manifest["probes"]) == 2
+    assert all(p["memory_bytes"] == 64 * 64 * 7 for p in manifest["probes"])
     # Errors the user can cause name what is wrong.
     bad = run_cli("place", "--scan", room["scan"], "--probe", *BASE_PROBE, "--views", room["folder"] / "nope.json",
                   "--out-probes", probes)

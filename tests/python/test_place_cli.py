@@ -50,6 +50,9 @@ def test_bake_auto_writes_the_plan_and_renders(room, native):
         assert record["resolution"] == planned["resolution"]
         assert record["position"] == pytest.approx(planned["position"])
     assert any(p["moved"] for p in plan)  # the two probes at x = 1.999 are moved off the wall
+    # --auto models only what the data carries in memory too: compact storage unless told otherwise
+    assert manifest["storage"] == {"radiance": "srgb8", "normal": "oct16", "distance_step": 0.001,
+                                   "confidence": False}
     camera = room["folder"] / "cam.json"
     run_cli("camera", "--position", 0, 0, 1.25, "--look-at", -2, 0, 1.25, "--res", 48, 32,
             "--out", camera, check=True)

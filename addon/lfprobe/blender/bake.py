@@ -2,18 +2,21 @@
 parse cache, or meshes through mesh_export), runs the native bake off the main thread (modal
 in the UI: progress bar, Esc cancels; synchronous in ``blender -b``) into a temporary folder
 beside the probe folder and renames it into place, so a cancelled or failed bake leaves the
-previous probe set as it was. Per-probe coverage from the manifest goes onto the grid."""
+previous probe set as it was. Per-probe coverage from the manifest goes onto the grid. The
+set's manifest records the grid's Storage (how the probes load into memory); Apply Storage
+changes it on a baked set without a rebake, as the probe files keep full precision."""
 
 import json
 import os
 import shutil
+from typing import Optional
 
 import bpy
 import numpy as np
 from bpy.props import StringProperty
 
 from ..core import native, pipeline
-from ..core.probe_set import read_manifest
+from ..core.probe_set import MANIFEST, read_manifest, summarize
 from ..core.sources import default_cache_dir, describe_scan
 from . import grid as grid_module
 from . import scan_object
@@ -147,7 +150,8 @@ class GridBake:
         self.placement = pipeline.ProbePlacementSpec(
             grid_min=list(low + self.offset), grid_max=list(high + self.offset), counts=list(grid.counts)
         )
-        self.options = pipeline.BakeOptions(resolution=grid.resolution)
+        storage, distance_step = grid.storage_choice()
+        self.options = pipeline.BakeOptions(resolution=grid.resolution, storage=storage, distance_step=distance_step)
         if grid.plan_from_data:
             # The grid's resolution is the largest a planned probe may get.
             self.options.plan = {"auto_resolution": True, "max_resolution": int(grid.resolution),
@@ -194,6 +198,72 @@ def show_baked_set(grid, manifest: dict, base_probes: int = -1) -> None:
     grid.plan_json = json.dumps(manifest.get("bake", {}).get("plan", []))
     grid.placement_json = "{}"
     grid.baked = True
+
+
+def storage_name(storage: Optional[dict]) -> str:
+    """"full", "compact" or "custom" for a manifest's "storage" dict (none: full, as it loads)."""
+    storage = storage or {}
+    radiance, normal = storage.get("radiance", "half"), storage.get("normal", "half")
+    step, confidence = float(storage.get("distance_step") or 0.0), storage.get("confidence", True)
+    if radiance == "half" and normal == "half" and step == 0.0 and confidence:
+        return "full"
+    if radiance == "srgb8" and normal == "oct16" and step > 0.0 and not confidence:
+        return "compact"
+    return "custom"
+
+
+# The panel asks on every redraw: one summary per folder, read again when its manifest changes.
+_set_memory: dict = {}
+
+
+def set_memory(folder: str) -> Optional[dict]:
+    """How the finished probe set in `folder` loads, from its manifest: {"memory_bytes" (maps and
+    coarse levels), "storage" (the manifest's dict), "name" (storage_name), "bytes_per_texel",
+    "distance_step"}; None when there is no readable set."""
+    try:
+        stat = os.stat(os.path.join(folder, MANIFEST))
+    except OSError:
+        return None
+    stamp = (stat.st_mtime_ns, stat.st_size, stat.st_ino)  # a rewrite renames a new file in
+    cached = _set_memory.get(folder)
+    if cached is not None and cached[0] == stamp:
+        return cached[1]
+    try:
+        info = summarize(folder)
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
+    probe = info["probes"][0] if info["probes"] else None
+    facts = {
+        "memory_bytes": int(info["memory_bytes"]),
+        "storage": info["storage"] or {},
+        "name": storage_name(info["storage"]),
+        # The manifest's per-probe bytes are its maps alone: N² texels of this many bytes.
+        "bytes_per_texel": round(int(probe.get("memory_bytes", 0)) / int(probe["resolution"]) ** 2) if probe else 0,
+        "distance_step": float((info["storage"] or {}).get("distance_step") or 0.0),
+    }
+    _set_memory[folder] = (stamp, facts)
+    return facts
+
+
+def memory_text(folder: str) -> str:
+    """E.g. "1.23 MiB in memory (compact: 7 bytes a texel, 1 mm distance steps)"."""
+    facts = set_memory(folder)
+    if facts is None:
+        return "no probe set"
+    detail = f"{facts['bytes_per_texel']} bytes a texel"
+    if facts["distance_step"] > 0.0:
+        detail += f", {facts['distance_step'] * 1000:g} mm distance steps"
+    return f"{facts['memory_bytes'] / 2**20:.2f} MiB in memory ({facts['name']}: {detail})"
+
+
+def storage_matches(grid, facts: Optional[dict]) -> bool:
+    """Whether the set described by `facts` (set_memory) loads as the grid's Storage says."""
+    if facts is None:
+        return True
+    storage, step = grid.storage_choice()
+    if facts["name"] != storage:
+        return False
+    return storage == "full" or abs(facts["distance_step"] - step) <= 1e-6 * step
 
 
 class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
@@ -265,6 +335,9 @@ class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
             return pipeline.bake_from_cloud(
                 cloud, self._staging, inputs.placement, inputs.options, sources, start_only=True
             )
+        # The jobs ran with start_only, which leaves the storage to the caller: recorded while
+        # the set is still staged, so the folder never holds a set that loads otherwise.
+        pipeline.apply_storage(self._staging, result, inputs.options)
         install_probe_set(self._staging, inputs.folder)
         self._staging = None
         manifest = read_manifest(inputs.folder)
@@ -277,7 +350,8 @@ class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
         self.report(
             {"INFO"},
             f"Baked {len(manifest['probes'])} probes into {inputs.folder}: "
-            f"{100 * mean.get('surface', 0):.0f}% surface, {100 * mean.get('unknown', 0):.0f}% unknown",
+            f"{100 * mean.get('surface', 0):.0f}% surface, {100 * mean.get('unknown', 0):.0f}% unknown; "
+            f"{memory_text(inputs.folder)}",
         )
         return {"FINISHED"}
 
@@ -287,9 +361,53 @@ class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
             self._staging = None
 
 
+class LFPROBE_OT_grid_apply_storage(bpy.types.Operator):
+    """Make the grid's baked probe set load as its Storage says (rewrites the set's manifest;
+    the probe files keep full precision, so no rebake is needed)"""
+
+    bl_idname = "object.lfprobe_grid_apply_storage"
+    bl_label = "Apply Storage"
+    # No UNDO: the manifest on disk is what changes, and undo would not bring it back.
+    bl_options = {"REGISTER"}
+
+    grid: StringProperty(name="Grid", description="Name of the grid object (empty: the active object)", default="")
+
+    @classmethod
+    def poll(cls, context):
+        return not grid_job_running()  # a bake or placement may be about to replace the folder
+
+    def execute(self, context):
+        try:
+            _native = native.load()
+            grid_obj = grid_object(context, self.grid)
+            folder = probe_folder(grid_obj)
+        except (BakeInputError, native.NativeModuleError) as error:
+            self.report({"ERROR"}, f"Apply storage: {error}")
+            return {"CANCELLED"}
+        before = set_memory(folder)
+        if before is None:
+            self.report({"ERROR"}, f"Apply storage: grid {grid_obj.name!r} has no baked probe set in {folder}: "
+                                   "bake it first")
+            return {"CANCELLED"}
+        storage, distance_step = grid_obj.lfprobe_grid.storage_choice()
+        try:
+            _native.set_probe_set_storage(folder, storage, distance_step=distance_step)
+        except (_native.InputError, _native.NativeIOError, OSError) as error:
+            self.report({"ERROR"}, f"Apply storage: {error}")
+            return {"CANCELLED"}
+        self.report({"INFO"}, f"Grid {grid_obj.name!r}: {memory_text(folder)}, "
+                              f"was {before['memory_bytes'] / 2**20:.2f} MiB ({before['name']})")
+        return {"FINISHED"}
+
+
+_CLASSES = (LFPROBE_OT_bake, LFPROBE_OT_grid_apply_storage)
+
+
 def register():
-    bpy.utils.register_class(LFPROBE_OT_bake)
+    for cls in _CLASSES:
+        bpy.utils.register_class(cls)
 
 
 def unregister():
-    bpy.utils.unregister_class(LFPROBE_OT_bake)
+    for cls in reversed(_CLASSES):
+        bpy.utils.unregister_class(cls)

@@ -1,6 +1,6 @@
 """Object properties panels: a scan cloud's facts (points, world offset, files, scanners) and
-a probe grid's settings, sources, probe folder and bake state, with Add Probes for Views in a
-sub-panel."""
+a probe grid's settings, sources, probe folder and bake state (with the memory its set loads
+into, and Apply Storage), with Add Probes for Views in a sub-panel."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import textwrap
 import bpy
 
 from ..core import native
+from . import bake
 from . import grid as grid_module
 from . import place_views
 
@@ -69,6 +70,20 @@ class LFPROBE_UL_grid_sources(bpy.types.UIList):
             layout.label(text=obj.name, icon="POINTCLOUD_DATA" if obj.lfprobe_scan.is_scan else "MESH_DATA")
 
 
+def _draw_storage(layout, obj) -> None:
+    """The baked set's memory as its manifest says it loads, and Apply Storage when that is
+    not the grid's Storage (changed since the bake, or by ./lfprobe store)."""
+    folder = grid_module.probe_dir_abspath(obj)
+    facts = bake.set_memory(folder)
+    if facts is None:
+        layout.label(text=f"No probe set in {folder}", icon="ERROR")
+        return
+    layout.label(text=f"Loads {bake.memory_text(folder)}", icon="MEMORY")
+    if not bake.storage_matches(obj.lfprobe_grid, facts):
+        layout.label(text=f"The set loads {facts['name']}, not as Storage says", icon="INFO")
+        layout.operator("object.lfprobe_grid_apply_storage", icon="FILE_REFRESH").grid = obj.name
+
+
 class LFPROBE_PT_grid(bpy.types.Panel):
     bl_label = "Light Field Probe Grid"
     bl_space_type = "PROPERTIES"
@@ -92,6 +107,9 @@ class LFPROBE_PT_grid(bpy.types.Panel):
         layout.prop(grid, "counts")
         layout.prop(grid, "resolution")
         layout.prop(grid, "coarse_resolution")
+        layout.prop(grid, "storage")
+        if grid.storage == "COMPACT":
+            layout.prop(grid, "distance_step")
         layout.prop(grid, "plan_from_data")
         layout.label(text="Sources")
         row = layout.row()
@@ -106,6 +124,7 @@ class LFPROBE_PT_grid(bpy.types.Panel):
         if grid.baked and coverage:
             known = sum(1.0 - c.get("unknown", 1.0) for c in coverage) / len(coverage)
             layout.label(text=f"Baked: {len(coverage)} probes, {100 * known:.0f}% of directions known", icon="CHECKMARK")
+            _draw_storage(layout, obj)
             plan = grid.plan()
             if plan:
                 moved = sum(1 for p in plan if p.get("moved"))

@@ -1,7 +1,7 @@
 """Add Probes for Views: probes where the views need them (lfprobe.core.adaptive in the add-on).
 
-The grid is baked as Bake bakes it (the same sources, resolution and planning: bake.GridBake),
-then a probe is added at the eye of the view that traces the most UNKNOWN pixels, again and
+The grid is baked as Bake bakes it (the same sources, resolution, planning and storage:
+bake.GridBake), then a probe is added at the eye of the view that traces the most UNKNOWN pixels, again and
 again, until every view is at most the grid's Target UNKNOWN, the next probe would take the
 set over its Memory Budget, or Max Added Probes were added. The views are the selected cameras
 or the scene camera over the frame range every Frame Step frames, exported as the renderer
@@ -199,8 +199,11 @@ class LFPROBE_OT_place_for_views(NativeJobOperator, bpy.types.Operator):
             # The thread gets plain values only: bpy data is not to be touched off the main thread.
             cameras, staging, options, placement = self._cameras, self._staging, inputs.options, inputs.placement
             base_grid = {"min": placement.grid_min, "max": placement.grid_max, "counts": placement.counts}
+            # Every bake of the placement records the grid's Storage: the views are traced, and the
+            # budget counted, as the finished set will load.
             settings = dict(self._place, resolution=options.resolution, plan=options.plan,
-                            splat_scale=options.splat_scale, hole_fill_texels=options.hole_fill_texels)
+                            splat_scale=options.splat_scale, hole_fill_texels=options.hole_fill_texels,
+                            storage=options.storage, distance_step=options.distance_step)
             return job_modal.ThreadJob(
                 lambda report: adaptive.place_adaptively(cloud, cameras, staging, base_grid=base_grid,
                                                          sources=sources, progress=report, **settings),

@@ -103,6 +103,32 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
         soft_max=512,
         default=0,
     )
+    # How the baked probes load into memory for tracing (the manifest's "storage"); the files
+    # keep full precision either way, so switching needs no rebake (Apply Storage).
+    storage: EnumProperty(
+        name="Storage",
+        description="How the probes are held in memory for tracing (the probe files keep full precision)",
+        items=(
+            ("FULL", "Full", "Half-float radiance and confidence, float32 distance, half-float normals: "
+             "18 bytes a texel"),
+            ("COMPACT", "Compact", "8-bit sRGB radiance, 16-bit distance in steps of Distance Step, "
+             "8+8-bit octahedral normals, no confidence: 7 bytes a texel"),
+        ),
+        default="FULL",
+    )
+    distance_step: FloatProperty(
+        name="Distance Step",
+        description="Compact storage: the distance quantum in metres (1 mm is half the range noise of "
+        "a FARO-class scanner at 10 m); a probe whose farthest surface needs more than 65534 steps "
+        "takes a coarser step of its own",
+        min=0.0001,
+        max=1.0,
+        soft_max=0.01,
+        precision=4,
+        step=1,
+        unit="LENGTH",
+        default=0.001,
+    )
     sources: CollectionProperty(type=LFProbeGridSource, name="Sources")
     active_source_index: IntProperty(name="Active Source", default=0)
     probe_dir: StringProperty(
@@ -180,6 +206,13 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
         description="Per-probe coverage after baking (JSON list of {surface, inferred, empty, unknown})",
         default="[]",
     )
+
+    def storage_choice(self) -> tuple:
+        """(storage, distance_step) as BakeOptions and set_probe_set_storage take them."""
+        if self.storage == "COMPACT":
+            # The property is single precision: 6 digits give the manifest 0.001, not 0.0010000000475.
+            return "compact", float(f"{self.distance_step:.6g}")
+        return "full", 0.0
 
     def plan(self) -> list:
         try:

@@ -140,6 +140,8 @@ def place_adaptively(
     log: Log = None,
     sources: Sequence[dict] = (),
     progress: Progress = None,
+    storage: Optional[str] = None,
+    distance_step: float = 0.0,
 ) -> AdaptiveResult:
     """Greedy placement into `folder` (a probe set that ends up holding the base and the added
     probes). cameras: camera dicts (DESIGN.md §3, world coordinates). base_grid: {"min", "max",
@@ -150,7 +152,9 @@ def place_adaptively(
     view that is still above the target already has a probe at its eye. sources: the manifest's
     source records (lfprobe.core.sources.describe_scan). progress(fraction, stage) is called
     through every bake and between traces; when it returns False the work stops with
-    Cancelled (folder is then left half made: the caller bakes into a staging folder)."""
+    Cancelled (folder is then left half made: the caller bakes into a staging folder).
+    storage, distance_step: how the probes load (BakeOptions); every bake records it, so the
+    views are traced and the budget counted as the finished set loads."""
     _native = native.load()
     if not cameras:
         raise ValueError("adaptive placement needs at least one view (camera)")
@@ -168,7 +172,8 @@ def place_adaptively(
     os.makedirs(folder)
     work = folder.rstrip(os.sep) + ".adding"
     options = BakeOptions(resolution=int(resolution), splat_scale=splat_scale,
-                          hole_fill_texels=hole_fill_texels, plan=plan)
+                          hole_fill_texels=hole_fill_texels, plan=plan, storage=storage,
+                          distance_step=distance_step)
 
     def step(fraction: float, stage: str):
         if progress is not None and progress(fraction, stage) is False:
