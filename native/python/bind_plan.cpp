@@ -39,6 +39,8 @@ PlanSettings plan_settings_from(const py::dict& options) {
             s.resolution.footprint = v.cast<double>();
         } else if (key == "quantile") {
             s.resolution.quantile = v.cast<double>();
+        } else if (key == "samples_per_spacing") {
+            s.resolution.samples_per_spacing = v.cast<double>();
         } else if (key == "classify") {
             s.classify = v.cast<bool>();
         } else if (key == "clearance") {
@@ -56,11 +58,12 @@ PlanSettings plan_settings_from(const py::dict& options) {
         } else if (key == "hole_fill_texels") {
             s.bake.hole_fill_texels = v.cast<int>();
         } else {
-            throw InputError("plan: unknown option '" + key +
-                             "' (expected auto_resolution, resolution, min_resolution, "
-                             "max_resolution, footprint, quantile, classify, clearance, "
-                             "cell_reach, max_move, drop, classify_resolution, splat_scale, "
-                             "hole_fill_texels)");
+            throw InputError(
+                "plan: unknown option '" + key +
+                "' (expected auto_resolution, resolution, min_resolution, "
+                "max_resolution, footprint, quantile, samples_per_spacing, classify, clearance, "
+                "cell_reach, max_move, drop, classify_resolution, splat_scale, "
+                "hole_fill_texels)");
         }
     }
     return s;

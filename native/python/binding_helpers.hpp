@@ -115,14 +115,11 @@ inline std::optional<ProbeStorage> storage_from(const pybind11::object& storage,
     throw InputError("storage: expected None, \"full\", \"compact\" or a dict");
 }
 
+// The manifest's "storage" object as a dict, with the bytes a texel it gives.
 inline pybind11::dict storage_dict(const ProbeStorage& storage) {
-    pybind11::dict d;
-    d["radiance"] = storage.radiance == RadiancePrecision::Srgb8 ? "srgb8" : "half";
-    d["normal"] = storage.normal == NormalPrecision::Oct16 ? "oct16" : "half";
-    d["distance_step"] = storage.distance_step;
-    d["confidence"] = storage.keep_confidence;
-    d["bytes_per_texel"] = storage.bytes_per_texel();
-    return d;
+    nlohmann::json j = storage.to_json();
+    j["bytes_per_texel"] = storage.bytes_per_texel();
+    return pybind11::module_::import("json").attr("loads")(j.dump());
 }
 
 inline pybind11::dict throughput_dict(const ThroughputResult& r) {

@@ -187,6 +187,12 @@ BakeSummary bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry&
                          {"max_splat_radius_texels", settings.bake.max_splat_radius_texels},
                          {"hole_fill_texels", settings.bake.hole_fill_texels},
                          {"points", cloud.size()},
+                         {"resolution_rule",
+                          {{"quantile", settings.resolution.quantile},
+                           {"samples_per_spacing", settings.resolution.samples_per_spacing},
+                           {"footprint", settings.resolution.footprint},
+                           {"min_resolution", settings.resolution.min_resolution},
+                           {"max_resolution", settings.resolution.max_resolution}}},
                          {"plan", plan.to_json(cloud.world_offset)}};
     manifest.sources = sources;
     return write_probe_set(

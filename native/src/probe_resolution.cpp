@@ -40,9 +40,11 @@ ResolutionChoice choose_resolution(const PointCloud& cloud, const LocalGeometry&
                                    const glm::dvec3& centre, const ResolutionSettings& settings) {
     if (settings.min_resolution < 1 || settings.max_resolution < settings.min_resolution ||
         settings.survey_resolution < 8 || !(settings.quantile >= 0.0 && settings.quantile <= 1.0) ||
-        !(settings.footprint >= 0.0)) {
+        !(settings.footprint >= 0.0) ||
+        !(settings.samples_per_spacing > 0.0 && std::isfinite(settings.samples_per_spacing))) {
         throw InputError("choose resolution: expected 1 <= min <= max resolution, a survey map of "
-                         "at least 8², a quantile in [0, 1] and a footprint >= 0");
+                         "at least 8², a quantile in [0, 1], a footprint >= 0 and samples per "
+                         "spacing > 0");
     }
     if (geometry.spacing.size() != cloud.size()) {
         throw InputError("choose resolution: the local geometry does not belong to the cloud");
@@ -103,14 +105,17 @@ ResolutionChoice choose_resolution(const PointCloud& cloud, const LocalGeometry&
     choice.data_resolution = quantile_of(supported, settings.quantile);
     choice.median_distance = quantile_of(distances, 0.5);
     choice.median_spacing = quantile_of(spacings, 0.5);
-    double wanted = choice.data_resolution;
+    double wanted = settings.samples_per_spacing * choice.data_resolution;
     if (settings.footprint > 0.0) {
         choice.footprint_resolution = kSqrtFourPi * choice.median_distance / settings.footprint;
         wanted = std::min(wanted, choice.footprint_resolution);
     }
     int chosen = settings.min_resolution;
+    double best = std::numeric_limits<double>::infinity();
     for (const int step : resolution_steps()) {
-        if (step <= wanted && step >= settings.min_resolution) {
+        const double off = std::abs(std::log(static_cast<double>(step) / wanted));
+        if (step >= settings.min_resolution && off < best) {
+            best = off;
             chosen = step;
         }
     }

@@ -43,6 +43,37 @@ struct OctantMap {
     double den1 = 0.0;
 };
 
+void set_miss(ProbeTraceResult& result, double t_max) {
+    result.status = TraceStatus::Miss;
+    result.t = kInf;
+    result.free_until = t_max;
+    result.texel = {-1, -1};
+}
+
+void set_unknown(ProbeTraceResult& result, oct::Texel texel, double t_enter) {
+    result.status = TraceStatus::Unknown;
+    result.t = kInf;
+    result.free_until = t_enter;
+    result.texel = texel;
+}
+
+// The ray meets the surface of texel `index` at t: a HIT when the surface faces the ray, else
+// UNKNOWN from t_enter (the back of a surface: what is in front of it is not known).
+void meet_texel(const ProbeMap& map, std::size_t index, oct::Texel texel, const glm::dvec3& d,
+                double t, double t_enter, ProbeTraceResult& result) {
+    const glm::vec3 normal = map.normal_at(index);
+    if (glm::dot(glm::dvec3(normal), d) > 0.0) {
+        set_unknown(result, texel, t_enter);
+        return;
+    }
+    result.status = TraceStatus::Hit;
+    result.t = t;
+    result.free_until = t;
+    result.texel = texel;
+    result.radiance = map.radiance_at(index);
+    result.normal = normal;
+}
+
 // A texel the ray passed just in front of (within the thickness): the hit if the ray then
 // turns up behind the next surface.
 struct NearMiss {
@@ -209,12 +240,7 @@ public:
     // just in front of: it went on past the probe.
     void pass_the_centre() { near_miss_.valid = false; }
 
-    void finish_miss(double t_max) {
-        result_.status = TraceStatus::Miss;
-        result_.t = kInf;
-        result_.free_until = t_max;
-        result_.texel = {-1, -1};
-    }
+    void finish_miss(double t_max) { set_miss(result_, t_max); }
 
     [[nodiscard]] const ProbeTraceResult& result() const { return result_; }
 
@@ -398,24 +424,12 @@ private:
     }
 
     bool meet(oct::Texel texel, std::size_t index, double t, double t_enter) {
-        const glm::vec3 normal = map_.normal_at(index);
-        if (glm::dot(glm::dvec3(normal), d_) > 0.0) {
-            return stop_unknown(texel, t_enter); // the back of a surface: what is in front of it?
-        }
-        result_.status = TraceStatus::Hit;
-        result_.t = t;
-        result_.free_until = t;
-        result_.texel = texel;
-        result_.radiance = map_.radiance_at(index);
-        result_.normal = normal;
+        meet_texel(map_, index, texel, d_, t, t_enter, result_);
         return true;
     }
 
     bool stop_unknown(oct::Texel texel, double t_enter) {
-        result_.status = TraceStatus::Unknown;
-        result_.t = kInf;
-        result_.free_until = t_enter;
-        result_.texel = texel;
+        set_unknown(result_, texel, t_enter);
         return true;
     }
 
@@ -476,10 +490,7 @@ ProbeTraceResult lookup_unit_direction(const ProbeMap& map, const glm::dvec3& d,
                                        double t_max, const TraceSettings& settings) {
     ProbeTraceResult result;
     const auto miss = [&] {
-        result.status = TraceStatus::Miss;
-        result.t = kInf;
-        result.free_until = t_max;
-        result.texel = {-1, -1};
+        set_miss(result, t_max);
         return result;
     };
     if (!(t_max > t_min)) {
@@ -488,10 +499,7 @@ ProbeTraceResult lookup_unit_direction(const ProbeMap& map, const glm::dvec3& d,
     const int n = map.resolution;
     const oct::Texel texel = oct::texel_of_direction(glm::vec3(d), n);
     const auto unknown = [&] {
-        result.status = TraceStatus::Unknown;
-        result.t = kInf;
-        result.free_until = t_min;
-        result.texel = texel;
+        set_unknown(result, texel, t_min);
         return result;
     };
     result.fine_steps = 1;
@@ -523,16 +531,7 @@ ProbeTraceResult lookup_unit_direction(const ProbeMap& map, const glm::dvec3& d,
             }
         }
     }
-    const glm::vec3 normal = map.normal_at(i);
-    if (glm::dot(glm::dvec3(normal), d) > 0.0) {
-        return unknown(); // the back of a surface
-    }
-    result.status = TraceStatus::Hit;
-    result.t = t;
-    result.free_until = t;
-    result.texel = texel;
-    result.radiance = map.radiance_at(i);
-    result.normal = normal;
+    meet_texel(map, i, texel, d, t, t_min, result);
     return result;
 }
 

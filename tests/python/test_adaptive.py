@@ -141,7 +141,8 @@ def test_place_views_cli(room):
 def test_planned_probes_take_the_resolution_the_data_supports(room):
     # 4 cm pitch seen from 0.4–4 m: the plan picks a resolution below the 256² cap.
     result = place_adaptively(room["cloud"], room["cameras"], str(room["folder"] / "planned"),
-                              base_positions=[BASE_PROBE], plan={"min_resolution": 16, "max_resolution": 256},
+                              base_positions=[BASE_PROBE],
+                              plan={"min_resolution": 16, "max_resolution": 256, "samples_per_spacing": 1.0},
                               target_unknown=0.01, threads=2)
     assert [a["view"] for a in result.added] == [0]
     assert 16 <= result.added[0]["resolution"] < 256

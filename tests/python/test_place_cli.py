@@ -28,9 +28,14 @@ def test_place_moves_a_probe_off_the_wall_and_sizes_by_density(room):
     assert open_probe["class"] == "useful" and not open_probe["moved"]
     assert wall_probe["found"] == "too_close" and wall_probe["moved"]
     assert wall_probe["position"][0] < 1.999
-    # 4 cm pitch seen from ~1.5–2 m: N ≈ 3.54 · r / s ≈ 130–180: the 128 or 192 step.
+    # 4 cm pitch seen from ~1.5–2 m: N ≈ 3.54 · r / s ≈ 130–180 at one texel per point, and
+    # twice that at the default two texels per point spacing: the 256 or 384 step.
     assert 100 < open_probe["data_resolution"] < 260
-    assert open_probe["resolution"] in (96, 128, 192)
+    assert open_probe["resolution"] in (192, 256, 384)
+    one_per_point = json.loads(run_cli("place", "--scan", room["scan"], "--scanner", 0, 0, 1.25,
+                                       "--probe", 0, 0, 1.25, "--no-cache", "--samples-per-spacing", 1,
+                                       "--json", "--quiet", check=True).stdout)
+    assert one_per_point["probes"][0]["resolution"] in (96, 128, 192)
     # Capping the texel footprint at 10 cm lowers it.
     capped = json.loads(run_cli("place", "--scan", room["scan"], "--scanner", 0, 0, 1.25,
                                 "--probe", 0, 0, 1.25, "--no-cache", "--footprint", 0.1,

@@ -168,7 +168,7 @@ def test_planning_section_compares_auto_adaptive_and_bytes_per_probe(tiny_report
     assert adaptive["hole_rate"] == pytest.approx(sum(f["hole_rate"] for f in placed) / walk)
     # c. bytes per probe at equal error, against the paper's 24.375 MB
     eq = plan["bytes_at_equal_error"]
-    assert eq["psnr"] >= eq["reference_psnr"]
+    assert eq["psnr"] >= eq["reference_psnr"] - eq["margin_db"] and eq["margin_db"] == 0.1
     assert eq["bytes_per_probe"] <= eq["reference_bytes_per_probe"]
     assert eq["fraction_of_paper"] == pytest.approx(eq["bytes_per_probe"] / PAPER_BYTES_PER_2048_PROBE)
     for sentence in data["findings"]["planning"]:

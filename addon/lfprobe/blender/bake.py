@@ -403,11 +403,5 @@ class LFPROBE_OT_grid_apply_storage(bpy.types.Operator):
 _CLASSES = (LFPROBE_OT_bake, LFPROBE_OT_grid_apply_storage)
 
 
-def register():
-    for cls in _CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(_CLASSES):
-        bpy.utils.unregister_class(cls)
+# Blender's own helper: registers in order, unregisters in reverse.
+register, unregister = bpy.utils.register_classes_factory(_CLASSES)

@@ -291,9 +291,11 @@ def _shared_panels():
 _CLASSES = (LFProbeRenderSettings, LFProbeRenderEngine, RENDER_PT_lfprobe_trace)
 
 
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(_CLASSES)
+
+
 def register():
-    for cls in _CLASSES:
-        bpy.utils.register_class(cls)
+    _register_classes()
     bpy.types.Scene.lfprobe_render = PointerProperty(type=LFProbeRenderSettings)
     for panel in _shared_panels():
         panel.COMPAT_ENGINES.add(LFProbeRenderEngine.bl_idname)
@@ -303,6 +305,5 @@ def unregister():
     for panel in _shared_panels():
         panel.COMPAT_ENGINES.discard(LFProbeRenderEngine.bl_idname)
     del bpy.types.Scene.lfprobe_render
-    for cls in reversed(_CLASSES):
-        bpy.utils.unregister_class(cls)
+    _unregister_classes()
     probe_view.forget_fields()

@@ -240,13 +240,14 @@ def _menu_add(self, _context):
 _CLASSES = (LFPROBE_OT_grid_add, LFPROBE_OT_grid_fit, LFPROBE_OT_grid_source_add, LFPROBE_OT_grid_source_remove)
 
 
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(_CLASSES)
+
+
 def register():
-    for cls in _CLASSES:
-        bpy.utils.register_class(cls)
+    _register_classes()
     bpy.types.VIEW3D_MT_add.append(_menu_add)
 
 
 def unregister():
     bpy.types.VIEW3D_MT_add.remove(_menu_add)
-    for cls in reversed(_CLASSES):
-        bpy.utils.unregister_class(cls)
+    _unregister_classes()

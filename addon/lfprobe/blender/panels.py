@@ -175,11 +175,5 @@ class LFPROBE_PT_grid_views(bpy.types.Panel):
 _CLASSES = (LFPROBE_PT_scan, LFPROBE_UL_grid_sources, LFPROBE_PT_grid, LFPROBE_PT_grid_views)
 
 
-def register():
-    for cls in _CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(_CLASSES):
-        bpy.utils.unregister_class(cls)
+# Blender's own helper: registers in order, unregisters in reverse.
+register, unregister = bpy.utils.register_classes_factory(_CLASSES)

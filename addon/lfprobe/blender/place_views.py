@@ -237,11 +237,5 @@ class LFPROBE_OT_place_for_views(NativeJobOperator, bpy.types.Operator):
 _CLASSES = (LFProbeCameraName, LFPROBE_OT_place_for_views)
 
 
-def register():
-    for cls in _CLASSES:
-        bpy.utils.register_class(cls)
-
-
-def unregister():
-    for cls in reversed(_CLASSES):
-        bpy.utils.unregister_class(cls)
+# Blender's own helper: registers in order, unregisters in reverse.
+register, unregister = bpy.utils.register_classes_factory(_CLASSES)

@@ -237,9 +237,11 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
 _CLASSES = (LFProbeScanProperties, LFProbeGridSource, LFProbeGridProperties)
 
 
+_register_classes, _unregister_classes = bpy.utils.register_classes_factory(_CLASSES)
+
+
 def register():
-    for cls in _CLASSES:
-        bpy.utils.register_class(cls)
+    _register_classes()
     bpy.types.Object.lfprobe_scan = PointerProperty(type=LFProbeScanProperties)
     bpy.types.Object.lfprobe_grid = PointerProperty(type=LFProbeGridProperties)
 
@@ -247,5 +249,4 @@ def register():
 def unregister():
     del bpy.types.Object.lfprobe_grid
     del bpy.types.Object.lfprobe_scan
-    for cls in reversed(_CLASSES):
-        bpy.utils.unregister_class(cls)
+    _unregister_classes()

@@ -409,9 +409,11 @@ def _planning_section(page, data: Dict[str, object], img) -> None:
     r, pl, eq = plan["resolution"], plan["placement"], plan["bytes_at_equal_error"]
     page.section("planning", "Model only what a scene needs")
     page.paragraph("Automatic resolution: the scene grid baked from the densest scan with bake --auto (each probe "
-                   "at the resolution its points support, N ≈ sqrt(4π)·r/s, between 64² and 4096²; probes inside "
-                   "geometry or against walls moved or dropped) against the same grid at every fixed resolution "
-                   "of the sweep (lfprobe's splat + fill bake, default trace), errors averaged over the views. "
+                   "at the resolution its points support: two texels per point spacing, N ≈ 2·sqrt(4π)·r/s at the "
+                   "median direction, rounded down to a power of two or the half between, between 64² and 4096²; "
+                   "probes inside geometry or against walls moved or dropped; compact storage) against the same "
+                   "grid at every fixed resolution of the sweep (lfprobe's splat + fill bake, default trace, full "
+                   "and compact storage), errors averaged over the views. "
                    f"Criterion: {r['criterion']}.", "note")
     for sentence in data["findings"].get("planning", []):
         page.paragraph(sentence, "finding")
@@ -479,8 +481,9 @@ def _planning_section(page, data: Dict[str, object], img) -> None:
     page.add("<h3>Bytes per probe at equal error</h3>")
     page.paragraph(f"Reference: {eq['reference_setting']} (the largest fixed resolution), mean PSNR "
                    f"{eq['reference_psnr']:.2f} dB. Among the {eq['candidates']} scan-baked settings of the sweep "
-                   "(default trace) and auto, the smallest memory per probe (loaded maps and coarse levels) that "
-                   f"reaches that PSNR: {eq['setting']}, {eq['bytes_per_probe'] / MIB:.3f} MiB per probe = "
+                   "(default trace, full or compact storage) and auto, the smallest memory per probe (loaded maps "
+                   f"and coarse levels) that reaches that PSNR within {eq.get('margin_db', 0.0):g} dB (the margin "
+                   f"auto is judged by): {eq['setting']}, {eq['bytes_per_probe'] / MIB:.3f} MiB per probe = "
                    f"{eq['fraction_of_paper']:.2%} of the paper's 24.375 MB per 2048² probe.", "note")
 
 
