@@ -293,39 +293,64 @@ glm::dmat3 Camera::rotation() const {
 }
 
 glm::dvec3 Camera::camera_direction(double image_x, double image_y) const {
-    const double w = static_cast<double>(width);
-    const double h = static_cast<double>(height);
+    return CameraRays(*this).camera_direction(image_x, image_y);
+}
+
+Ray Camera::world_ray(double image_x, double image_y) const {
+    return CameraRays(*this).world_ray(image_x, image_y);
+}
+
+CameraRays::CameraRays(const Camera& camera)
+    : panorama_(camera.type == CameraType::PanoramaEquirect),
+      width_(static_cast<double>(camera.width)), height_(static_cast<double>(camera.height)),
+      position_(camera.position()), rotation_(camera.rotation()), clip_start_(camera.clip_start),
+      clip_end_(camera.clip_end) {
+    if (panorama_) {
+        const EquirectRange range = equirect_range_of(camera);
+        phi_scale_ = range.phi_scale;
+        phi_offset_ = range.phi_offset;
+        theta_scale_ = range.theta_scale;
+        theta_offset_ = range.theta_offset;
+    } else {
+        const Viewplane vp = viewplane_of(camera);
+        left_ = vp.left;
+        right_ = vp.right;
+        bottom_ = vp.bottom;
+        top_ = vp.top;
+        tan_half_fov_ = vp.tan_half_fov;
+    }
+}
+
+glm::dvec3 CameraRays::camera_direction(double image_x, double image_y) const {
     const double raster_x = image_x;
-    const double raster_y = h - image_y; // Cycles' raster y runs up from the bottom row
-    if (type == CameraType::PanoramaEquirect) {
-        const EquirectRange range = equirect_range_of(*this);
-        const double u = raster_x / w;
-        const double v = raster_y / h;
-        const double phi = range.phi_scale * u + range.phi_offset;
-        const double theta = range.theta_scale * v + range.theta_offset;
+    const double raster_y = height_ - image_y; // Cycles' raster y runs up from the bottom row
+    if (panorama_) {
+        const double u = raster_x / width_;
+        const double v = raster_y / height_;
+        const double phi = phi_scale_ * u + phi_offset_;
+        const double theta = theta_scale_ * v + theta_offset_;
         const glm::dvec3 d(std::sin(theta) * std::cos(phi), std::sin(theta) * std::sin(phi),
                            std::cos(theta));
         return glm::normalize(panorama_to_camera(d));
     }
-    const Viewplane vp = viewplane_of(*this);
-    const double screen_x = vp.left + (vp.right - vp.left) * raster_x / w;
-    const double screen_y = vp.bottom + (vp.top - vp.bottom) * raster_y / h;
-    return glm::normalize(glm::dvec3(screen_x * vp.tan_half_fov, screen_y * vp.tan_half_fov, -1.0));
+    const double screen_x = left_ + (right_ - left_) * raster_x / width_;
+    const double screen_y = bottom_ + (top_ - bottom_) * raster_y / height_;
+    return glm::normalize(glm::dvec3(screen_x * tan_half_fov_, screen_y * tan_half_fov_, -1.0));
 }
 
-Ray Camera::world_ray(double image_x, double image_y) const {
+Ray CameraRays::world_ray(double image_x, double image_y) const {
     const glm::dvec3 local = camera_direction(image_x, image_y);
     Ray ray;
-    ray.origin = position();
-    ray.direction = glm::normalize(rotation() * local);
-    if (type == CameraType::PanoramaEquirect) {
-        ray.t_min = clip_start;
-        ray.t_max = clip_end;
+    ray.origin = position_;
+    ray.direction = glm::normalize(rotation_ * local);
+    if (panorama_) {
+        ray.t_min = clip_start_;
+        ray.t_max = clip_end_;
     } else {
         // The clip planes are perpendicular to the view axis: t = clip / cos(angle to −Z).
         const double inv_cos = 1.0 / -local.z;
-        ray.t_min = clip_start * inv_cos;
-        ray.t_max = clip_end * inv_cos;
+        ray.t_min = clip_start_ * inv_cos;
+        ray.t_max = clip_end_ * inv_cos;
     }
     return ray;
 }

@@ -53,6 +53,7 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
     const auto tile = static_cast<std::size_t>(settings.tile_size);
     const float inv_samples = 1.0f / static_cast<float>(n * n);
     std::atomic<std::uint64_t> rays{0};
+    const CameraRays camera_rays(camera);
     const auto start = std::chrono::steady_clock::now();
     tbb::parallel_for(
         tbb::blocked_range2d<int>(0, camera.height, tile, 0, camera.width, tile),
@@ -64,7 +65,7 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
             for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
                 for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
                     const std::size_t i = image.index(x, y);
-                    const Ray centre_ray = camera.local_pixel_ray(x, y, offset);
+                    const Ray centre_ray = camera_rays.local_pixel_ray(x, y, offset);
                     const MeshHit centre = scene.intersect(centre_ray);
                     ++tile_rays;
                     glm::vec3 colour{0.0f};
@@ -80,8 +81,8 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
                             for (int sx = 0; sx < n; ++sx) {
                                 const double ox = (sx + 0.5) / n;
                                 const double oy = (sy + 0.5) / n;
-                                const MeshHit h =
-                                    scene.intersect(camera.local_pixel_ray(x, y, offset, ox, oy));
+                                const MeshHit h = scene.intersect(
+                                    camera_rays.local_pixel_ray(x, y, offset, ox, oy));
                                 ++tile_rays;
                                 if (h.hit) {
                                     colour += h.base_color;

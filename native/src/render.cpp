@@ -112,6 +112,7 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
     // An eye at a probe (DESIGN.md §4): every ray is one texel lookup in that probe; only rays
     // it cannot answer (UNKNOWN texels) go through the whole field.
     const int eye_probe = probe_at(field, camera.position() - offset, trace.probe);
+    const CameraRays camera_rays(camera);
     tbb::parallel_for(
         tbb::blocked_range2d<int>(0, camera.height, tile, 0, camera.width, tile),
         [&](const tbb::blocked_range2d<int>& r) {
@@ -120,8 +121,8 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
             }
             for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
                 for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
-                    const Ray ray =
-                        camera.local_pixel_ray(x, y, offset, settings.sample_x, settings.sample_y);
+                    const Ray ray = camera_rays.local_pixel_ray(x, y, offset, settings.sample_x,
+                                                                settings.sample_y);
                     const FieldTraceResult hit = trace_camera_ray(field, eye_probe, ray, trace);
                     const std::size_t i = image.index(x, y);
                     const bool is_hit = hit.status == TraceStatus::Hit;

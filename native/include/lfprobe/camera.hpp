@@ -100,6 +100,46 @@ struct Camera {
     [[nodiscard]] double pixels_per_tangent() const;
 };
 
+// A camera's rays with the work per camera (rotation with the scale cleared, viewplane,
+// panorama range) done once: what the renderers ask for every pixel. The rays are exactly
+// Camera::world_ray's (which is this class used once).
+class CameraRays {
+public:
+    explicit CameraRays(const Camera& camera);
+
+    [[nodiscard]] glm::dvec3 camera_direction(double image_x, double image_y) const;
+    [[nodiscard]] Ray world_ray(double image_x, double image_y) const;
+    [[nodiscard]] Ray pixel_ray(int x, int y, double sample_x = 0.5, double sample_y = 0.5) const {
+        return world_ray(static_cast<double>(x) + sample_x, static_cast<double>(y) + sample_y);
+    }
+    [[nodiscard]] Ray local_pixel_ray(int x, int y, const glm::dvec3& world_offset,
+                                      double sample_x = 0.5, double sample_y = 0.5) const {
+        Ray ray = pixel_ray(x, y, sample_x, sample_y);
+        ray.origin -= world_offset;
+        return ray;
+    }
+
+private:
+    bool panorama_ = false;
+    double width_ = 1.0;
+    double height_ = 1.0;
+    glm::dvec3 position_{0.0};
+    glm::dmat3 rotation_{1.0};
+    // Perspective: the viewplane (units of tan(fov/2)) and tan(fov/2).
+    double left_ = -1.0;
+    double right_ = 1.0;
+    double bottom_ = -1.0;
+    double top_ = 1.0;
+    double tan_half_fov_ = 1.0;
+    // Panorama: Cycles' equirectangular range.
+    double phi_scale_ = 0.0;
+    double phi_offset_ = 0.0;
+    double theta_scale_ = 0.0;
+    double theta_offset_ = 0.0;
+    double clip_start_ = 0.0;
+    double clip_end_ = 0.0;
+};
+
 // Reads a camera JSON file. Throws IoError when it cannot be read, InputError when it is not a
 // valid camera (the message names the file and the key).
 [[nodiscard]] Camera read_camera_json(const std::string& path);

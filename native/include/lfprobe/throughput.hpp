@@ -40,10 +40,11 @@ template <class IsHit>
     }
     std::vector<Ray> rays(static_cast<std::size_t>(camera.width) *
                           static_cast<std::size_t>(camera.height));
+    const CameraRays camera_rays(camera);
     for (int y = 0; y < camera.height; ++y) {
         for (int x = 0; x < camera.width; ++x) {
             rays[static_cast<std::size_t>(y) * static_cast<std::size_t>(camera.width) +
-                 static_cast<std::size_t>(x)] = camera.local_pixel_ray(x, y, world_offset);
+                 static_cast<std::size_t>(x)] = camera_rays.local_pixel_ray(x, y, world_offset);
         }
     }
     ThroughputResult result;
