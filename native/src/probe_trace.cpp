@@ -190,11 +190,16 @@ public:
                     lv.min_distance[static_cast<std::size_t>(cy) *
                                         static_cast<std::size_t>(lv.resolution) +
                                     static_cast<std::size_t>(cx)]);
-                const double t_exit = std::max(
-                    std::min({cell_exit(m, m.u, cx, shift), cell_exit(m, m.v, cy, shift), tb}), t);
+                const double exit_x = cell_exit(m, m.u, cx, shift);
+                const double exit_y = cell_exit(m, m.v, cy, shift);
+                const double t_exit = std::max(std::min({exit_x, exit_y, tb}), t);
                 if (skippable(cell_min, t, t_exit)) {
-                    const int nx = advance(m, m.u, x, t_exit);
-                    const int ny = advance(m, m.v, y, t_exit);
+                    // Along the axis whose cell edge ends the skip, the landing texel is next
+                    // to that edge: the search starts there.
+                    const int nx = advance(m, m.u, x, t_exit,
+                                           exit_x == t_exit ? exit_texel(m.u, cx, shift) : -1);
+                    const int ny = advance(m, m.v, y, t_exit,
+                                           exit_y == t_exit ? exit_texel(m.v, cy, shift) : -1);
                     if (t_exit > t || nx != x || ny != y) {
                         if (t_exit > t) {
                             near_miss_.valid = false; // every texel passed was clearly in front
@@ -311,15 +316,44 @@ private:
         return kInf;
     }
 
+    // The texel a walk enters when it leaves coarse cell `cell` through the edge cell_exit
+    // gave; −1 when that edge is the map's border (cell_exit is +inf there).
+    [[nodiscard]] int exit_texel(const OctantCoordinate& c, int cell, int shift) const {
+        if (c.step > 0) {
+            const int edge = (cell + 1) << shift;
+            return edge < n_ ? edge : -1;
+        }
+        if (c.step < 0) {
+            const int edge = cell << shift;
+            return edge > 0 ? edge - 1 : -1;
+        }
+        return -1;
+    }
+
     // The fine index after every edge crossed up to t_exit: the count of edges the ray crosses
     // by then, as the fine walk's own comparisons count them, so that a skip lands exactly where
     // the fine walk would be. Crossing times grow with the edge index along the walk's
     // direction, so the search starts at the texel under p(t_exit) and settles with a few
     // comparisons instead of testing every edge a long skip passes.
+    // `start`, when not −1, is a texel known to be crossed into by t_exit (exit_texel), from
+    // which the search only moves on.
     [[nodiscard]] int advance(const OctantMap& m, const OctantCoordinate& c, int index,
-                              double t_exit) const {
+                              double t_exit, int start = -1) const {
         if (c.step == 0) {
             return index;
+        }
+        if (start >= 0) {
+            int guess = start;
+            if (c.step > 0) {
+                while (guess + 1 < n_ && crossing(m, c, guess + 1) <= t_exit) {
+                    ++guess;
+                }
+            } else {
+                while (guess > 0 && crossing(m, c, guess) <= t_exit) {
+                    --guess;
+                }
+            }
+            return guess;
         }
         const double den = m.den0 + t_exit * m.den1;
         double p = den > 0.0 ? (c.num0 + t_exit * c.num1) / den : 0.0;
@@ -382,9 +416,13 @@ private:
         if (std::isinf(cell_min)) {
             return true;
         }
-        const double far = max_distance(t0, t1);
         const double margin = 1e-9 * (1.0 + cell_min);
-        return far < cell_min - thickness(cell_min) - margin;
+        const double clear = cell_min - thickness(cell_min) - margin;
+        if (!(clear > 0.0) || !std::isfinite(t1)) {
+            return false;
+        }
+        // Squared, without the square root: the margin covers the rounding either way.
+        return std::max(distance2(t0), distance2(t1)) < clear * clear;
     }
 
     // The first t in [t0, t1] with |o + t d| = r (t² + 2bt + c = 0, stable form), or, when
