@@ -77,12 +77,10 @@ ProbeStorage ProbeStorage::from_json(const nlohmann::json& j, const std::string&
 
 std::size_t ProbeStorage::bytes_per_texel() const {
     std::size_t bytes = distance_step > 0.0 ? 2 : 4;
-    bytes += radiance == RadiancePrecision::Srgb8 ? 3 : 6;
+    // Half radiance keeps the RGBA layout of the file (A interleaved, whatever keep_confidence
+    // says); 8-bit sRGB has no A.
+    bytes += radiance == RadiancePrecision::Srgb8 ? 3 : 8;
     bytes += normal == NormalPrecision::Oct16 ? 2 : 6;
-    // The half A channel is interleaved with half RGB; 8-bit sRGB drops it whatever is asked.
-    if (keep_confidence && radiance == RadiancePrecision::Half) {
-        bytes += 2;
-    }
     return bytes;
 }
 

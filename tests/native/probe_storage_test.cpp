@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <random>
+#include <tuple>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -107,6 +108,25 @@ TEST(ProbeStorage, PackingKeepsStatesAndBoundsTheErrors) {
             << i;
     }
     EXPECT_THROW((void)pack_probe(packed, storage), InputError);
+}
+
+// Any mix of channel precisions takes the bytes it says it takes.
+TEST(ProbeStorage, MixedStorageTakesTheBytesItStates) {
+    const BoxRoomScene scene;
+    for (const auto& [radiance, normal, step] :
+         {std::tuple{RadiancePrecision::Half, NormalPrecision::Oct16, 0.001},
+          std::tuple{RadiancePrecision::Srgb8, NormalPrecision::Half, 0.0},
+          std::tuple{RadiancePrecision::Half, NormalPrecision::Half, 0.002}}) {
+        ProbeStorage storage;
+        storage.radiance = radiance;
+        storage.normal = normal;
+        storage.distance_step = step;
+        storage.keep_confidence = false;
+        ProbeMap map = scenes::analytic_probe(scene, {0.0, 0.0, 1.2}, 32);
+        (void)pack_probe(map, storage);
+        EXPECT_EQ(map.memory_bytes(), map.texel_count() * storage.bytes_per_texel());
+        EXPECT_TRUE(map.is_complete());
+    }
 }
 
 TEST(ProbeStorage, AFarProbeTakesACoarserStepInsteadOfClamping) {

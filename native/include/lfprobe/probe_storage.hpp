@@ -43,7 +43,9 @@ struct ProbeStorage {
     // Distance quantum in metres; 0 keeps float32. A probe whose farthest surface does not fit
     // 65534 steps gets a coarser step of its own (recorded in its packed channels).
     double distance_step = 0.0;
-    bool keep_confidence = true; // the A channel (the trace never reads it)
+    // The A channel (the trace never reads it). Only 8-bit sRGB radiance drops it: half
+    // radiance stays RGBA as in the file.
+    bool keep_confidence = true;
 
     [[nodiscard]] bool is_full() const {
         return radiance == RadiancePrecision::Half && normal == NormalPrecision::Half &&
