@@ -18,6 +18,9 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 // The angular size of a texel of an N×N octahedral map is about sqrt(4π)/N (4π sr over N²).
 constexpr double kTexelAngleTimesN = 3.5449077018110318;
 constexpr int kMaxLevels = 32;
+// Texel units: how far from a texel edge a map coordinate must be for its texel to be taken
+// without comparing crossing times.
+constexpr double kEdgeMargin = 1e-4;
 
 [[nodiscard]] double sign_not_zero(double a) {
     return a >= 0.0 ? 1.0 : -1.0;
@@ -362,6 +365,17 @@ private:
         }
         const double g = (0.5 * std::clamp(p, -1.0, 1.0) + 0.5) * static_cast<double>(n_);
         int guess = std::clamp(static_cast<int>(std::floor(g)), 0, n_ - 1);
+        // Far from every edge the texel under p(t_exit) is the answer: the rounding of p and of
+        // the crossing times is far below this margin, unless the L1 norm cancels (the ray
+        // passing next to the probe centre). Near an edge the crossing times decide, as the
+        // fine walk decides.
+        const double from_edge = std::abs(g - std::round(g));
+        const bool no_cancellation = den * 1e6 > std::abs(m.den0) + std::abs(t_exit * m.den1);
+        if (from_edge > kEdgeMargin && no_cancellation &&
+            (c.step > 0 ? guess >= index : guess <= index) && g > 0.0 &&
+            g < static_cast<double>(n_)) {
+            return guess;
+        }
         if (c.step > 0) {
             guess = std::max(guess, index);
             while (guess > index && !(crossing(m, c, guess) <= t_exit)) {
