@@ -266,7 +266,19 @@ def storage_matches(grid, facts: Optional[dict]) -> bool:
     return storage == "full" or abs(facts["distance_step"] - step) <= 1e-6 * step
 
 
-class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
+class GridJobOperator(NativeJobOperator):
+    """An operator that runs one job on a grid (Bake, Add Probes for Views): one such job at a
+    time, modal in the UI and synchronous in the background (NativeJobOperator)."""
+
+    @classmethod
+    def poll(cls, context):
+        return not grid_job_running()
+
+    def execute(self, context):
+        return self.run_job(context)
+
+
+class LFPROBE_OT_bake(GridJobOperator, bpy.types.Operator):
     """Bake the probe grid's light field probes from its sources (Esc cancels)"""
 
     bl_idname = "object.lfprobe_bake"
@@ -275,13 +287,6 @@ class LFPROBE_OT_bake(NativeJobOperator, bpy.types.Operator):
     job_label = GRID_JOB_LABELS[0]
 
     grid: StringProperty(name="Grid", description="Name of the grid object (empty: the active object)", default="")
-
-    @classmethod
-    def poll(cls, context):
-        return not grid_job_running()
-
-    def execute(self, context):
-        return self.run_job(context)
 
     def start_job(self, context):
         self._staging = None

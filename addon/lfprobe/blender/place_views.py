@@ -26,7 +26,6 @@ from . import camera_export
 from . import grid as grid_module
 from . import job_modal
 from . import probe_view
-from .job_modal import NativeJobOperator
 
 # The short words for adaptive.STOP_REASONS that the panel's one line has room for.
 STOP_WORDS = {
@@ -134,7 +133,7 @@ def summary_line(placement: dict, colour: str = "") -> str:
             f"(worst view), {placement.get('memory_bytes', 0) / 2**20:.2f} MiB, {STOP_WORDS.get(stop, stop)}")
 
 
-class LFPROBE_OT_place_for_views(NativeJobOperator, bpy.types.Operator):
+class LFPROBE_OT_place_for_views(bake.GridJobOperator, bpy.types.Operator):
     """Bake the probe grid, then add probes at the eyes of the views that trace the most UNKNOWN
     pixels until the target or the memory budget is met (Esc cancels)"""
 
@@ -150,13 +149,6 @@ class LFPROBE_OT_place_for_views(NativeJobOperator, bpy.types.Operator):
         description="Camera objects whose views to serve (empty: as the grid's Views says)",
         options={"HIDDEN", "SKIP_SAVE"},
     )
-
-    @classmethod
-    def poll(cls, context):
-        return not bake.grid_job_running()
-
-    def execute(self, context):
-        return self.run_job(context)
 
     def start_job(self, context):
         self._staging = None
