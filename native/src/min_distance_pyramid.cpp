@@ -1,7 +1,9 @@
 #include "lfprobe/min_distance_pyramid.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
+#include <utility>
 
 #include <tbb/parallel_for.h>
 
@@ -50,10 +52,39 @@ MinDistancePyramid::MinDistancePyramid(const std::vector<float>& fine, int n, in
     }
 }
 
+void MinDistancePyramid::quantise(double step) {
+    if (!(step > 0.0) || !std::isfinite(step)) {
+        throw InputError("min-distance pyramid: the quantisation step must be positive");
+    }
+    for (MinDistanceLevel& level : levels_) {
+        if (!level.min_code.empty()) {
+            throw InputError("min-distance pyramid: the levels are quantised already");
+        }
+        std::vector<std::uint16_t> codes(level.min_distance.size());
+        for (std::size_t i = 0; i < codes.size(); ++i) {
+            const float d = level.min_distance[i];
+            if (std::isinf(d)) {
+                codes[i] = 0xFFFF;
+                continue;
+            }
+            double code = std::clamp(std::floor(static_cast<double>(d) / step), 0.0, 65534.0);
+            // Down, also where the decode's own rounding would land above d.
+            while (code > 0.0 && static_cast<float>(code * step) > d) {
+                code -= 1.0;
+            }
+            codes[i] = static_cast<std::uint16_t>(code);
+        }
+        level.min_code = std::move(codes);
+        level.step = step;
+        std::vector<float>().swap(level.min_distance);
+    }
+}
+
 std::size_t MinDistancePyramid::memory_bytes() const {
     std::size_t bytes = 0;
     for (const auto& level : levels_) {
-        bytes += level.min_distance.size() * sizeof(float);
+        bytes += level.min_distance.size() * sizeof(float) +
+                 level.min_code.size() * sizeof(std::uint16_t);
     }
     return bytes;
 }

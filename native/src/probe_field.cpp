@@ -182,8 +182,12 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
         if (!chosen.is_full()) {
             pack_probe(map, chosen);
         }
-        // The levels bound what the trace reads: the packed distances when packed.
+        // The levels bound what the trace reads: the packed distances when packed, and are
+        // held in the same 16-bit steps then.
         field.levels_[i] = MinDistancePyramid(decoded_distances(map), map.resolution, coarsest);
+        if (map.packed.distance_step > 0.0) {
+            field.levels_[i].quantise(map.packed.distance_step);
+        }
         field.manifest_.probes[i].memory_bytes = map.memory_bytes();
         if (progress != nullptr) {
             progress->advance(1);
@@ -218,6 +222,9 @@ void ProbeField::build_levels(Progress* progress) {
             throw InputError("probe field: probe " + std::to_string(i) + " has no maps");
         }
         levels_[i] = MinDistancePyramid(decoded_distances(probes_[i]), probes_[i].resolution);
+        if (probes_[i].packed.distance_step > 0.0) {
+            levels_[i].quantise(probes_[i].packed.distance_step);
+        }
         if (progress != nullptr) {
             progress->advance(1);
         }

@@ -189,10 +189,9 @@ public:
                 }
                 ++result_.coarse_steps;
                 const MinDistanceLevel& lv = (*levels_)[l];
-                const double cell_min = static_cast<double>(
-                    lv.min_distance[static_cast<std::size_t>(cy) *
-                                        static_cast<std::size_t>(lv.resolution) +
-                                    static_cast<std::size_t>(cx)]);
+                const double cell_min = static_cast<double>(lv.value(
+                    static_cast<std::size_t>(cy) * static_cast<std::size_t>(lv.resolution) +
+                    static_cast<std::size_t>(cx)));
                 const double exit_x = cell_exit(m, m.u, cx, shift);
                 const double exit_y = cell_exit(m, m.v, cy, shift);
                 const double t_exit = std::max(std::min({exit_x, exit_y, tb}), t);

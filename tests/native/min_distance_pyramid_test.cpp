@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "lfprobe/error.hpp"
 #include "lfprobe/min_distance_pyramid.hpp"
 #include "lfprobe/texel_state.hpp"
 
@@ -87,4 +88,45 @@ TEST(MinDistancePyramid, IsTheExactMinimumNotASample) {
         EXPECT_EQ(smallest, 0.5f);
     }
     EXPECT_EQ(pyramid.levels().back().resolution, 2);
+}
+
+// Compact storage holds the levels in 16-bit steps: each quantised bound is at most the exact
+// one and at most a step below it, empty stays +inf, unknown (0) stays 0, and distances past
+// the last code are bounded by it.
+TEST(MinDistancePyramid, QuantisedLevelsStayBoundsWithinAStep) {
+    std::mt19937 rng(7);
+    for (const double step : {0.001, 0.0003, 0.01}) {
+        const int n = 77;
+        std::vector<float> fine = random_map(n, rng, 0.02, 0.2);
+        fine[5] = 100.0f; // beyond 65534 steps of 1 mm and of 0.3 mm
+        const MinDistancePyramid exact(fine, n);
+        MinDistancePyramid quantised(fine, n);
+        quantised.quantise(step);
+        EXPECT_LT(quantised.memory_bytes(), exact.memory_bytes());
+        EXPECT_EQ(2 * quantised.memory_bytes(), exact.memory_bytes());
+        for (std::size_t l = 0; l < exact.levels().size(); ++l) {
+            const MinDistanceLevel& e = exact.levels()[l];
+            const MinDistanceLevel& q = quantised.levels()[l];
+            ASSERT_TRUE(q.min_distance.empty());
+            for (std::size_t i = 0; i < e.min_distance.size(); ++i) {
+                const float a = e.min_distance[i];
+                const float b = q.value(i);
+                if (std::isinf(a)) {
+                    EXPECT_TRUE(std::isinf(b));
+                    continue;
+                }
+                EXPECT_LE(b, a);
+                if (a < 65534.0 * step) {
+                    EXPECT_GE(static_cast<double>(b), static_cast<double>(a) - step - 1e-6);
+                }
+                if (a == 0.0f) {
+                    EXPECT_EQ(b, 0.0f);
+                }
+            }
+        }
+    }
+    MinDistancePyramid twice(std::vector<float>(16, 1.0f), 4);
+    twice.quantise(0.001);
+    EXPECT_THROW(twice.quantise(0.001), InputError);
+    EXPECT_THROW(MinDistancePyramid(std::vector<float>(16, 1.0f), 4).quantise(0.0), InputError);
 }

@@ -137,12 +137,15 @@ def test_planning_section_compares_auto_adaptive_and_bytes_per_probe(tiny_report
     assert r["psnr_difference_db"] == pytest.approx(auto["psnr"] - r["best_fixed_psnr"])
     assert r["memory_ratio"] == pytest.approx(auto["memory_bytes"] / r["best_fixed_memory_bytes"])
     assert r["matches_best_error"] == (r["psnr_difference_db"] >= -0.1)
-    # storage: the same sets loaded full and compact, 7 against 18 bytes a texel on the maps
+    # storage: the same sets loaded full and compact, 7 against 18 bytes a texel on the maps and
+    # 16-bit against float32 coarse levels
+    from lfprobe.core.probe_set import coarse_level_bytes
     storage = plan["storage"]
     assert [s["resolution"] for s in storage] == [64, 128]
     for s in storage:
         n = s["resolution"]
-        assert s["full_memory_bytes_per_probe"] - s["compact_memory_bytes_per_probe"] == 11 * n * n
+        assert s["full_memory_bytes_per_probe"] - s["compact_memory_bytes_per_probe"] == \
+            11 * n * n + coarse_level_bytes(n) // 2
         assert abs(s["psnr_difference_db"]) < 0.5
     assert os.path.exists(out / "planning_storage.csv")
     # b. adaptive placement against a uniform grid, per walk frame

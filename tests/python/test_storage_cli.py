@@ -73,8 +73,9 @@ def test_store_switches_a_baked_set_and_info_reports_it(native, room):
     assert "loads as srgb8 radiance" in result.stdout
     after = json.loads(run_cli("info", probes, "--json", check=True).stdout)
     assert after["storage"]["distance_step"] == 0.001
-    # 18 → 7 bytes a texel on the fine maps; the coarse levels stay float32.
-    assert before["memory_bytes"] - after["memory_bytes"] == 4 * 64 * 64 * 11
+    # 18 → 7 bytes a texel on the fine maps, float32 → 16-bit coarse levels.
+    from lfprobe.core.probe_set import coarse_level_bytes
+    assert before["memory_bytes"] - after["memory_bytes"] == 4 * (64 * 64 * 11 + coarse_level_bytes(64) // 2)
     field = native.ProbeField.load(str(probes))
     assert field.storage["bytes_per_texel"] == 7
     assert native.ProbeField.load(str(probes), storage="full").storage["bytes_per_texel"] == 18

@@ -64,10 +64,10 @@ def camera_position(camera: dict) -> List[float]:
         raise ValueError(f"camera: expected matrix_world as 4×4 rows ({error})") from error
 
 
-def probe_memory_bytes(record: dict) -> int:
+def probe_memory_bytes(record: dict, storage: Optional[dict] = None) -> int:
     """Loaded bytes of one manifest probe record: its maps and the coarse levels derived on load
-    (as lfprobe.core.probe_set.summarize counts them)."""
-    return int(record.get("memory_bytes", 0)) + coarse_level_bytes(int(record["resolution"]))
+    (as lfprobe.core.probe_set.summarize counts them); storage: the manifest's "storage"."""
+    return int(record.get("memory_bytes", 0)) + coarse_level_bytes(int(record["resolution"]), storage)
 
 
 def unknown_rate(image: dict) -> float:
@@ -95,7 +95,8 @@ class _GrowingSet:
         return [] if self.manifest is None else self.manifest["probes"]
 
     def memory_bytes(self) -> int:
-        return sum(probe_memory_bytes(p) for p in self.probes)
+        storage = None if self.manifest is None else self.manifest.get("storage")
+        return sum(probe_memory_bytes(p, storage) for p in self.probes)
 
     def append(self, one_probe_folder: str, note: dict) -> None:
         """Moves the single probe of `one_probe_folder` into this set and rewrites the manifest."""
@@ -244,7 +245,7 @@ def place_adaptively(
                                                             f"{worst + 1} ({rates[worst]:.1%} UNKNOWN)")
             candidate_set = read_manifest(work)
             candidate = candidate_set["probes"][0]
-            cost = probe_memory_bytes(candidate)
+            cost = probe_memory_bytes(candidate, candidate_set.get("storage"))
             if budget_bytes is not None and memory + cost > budget_bytes:
                 result.stopped_because = (f"the next probe ({cost / 2**20:.2f} MiB) would exceed the budget "
                                           f"({budget_bytes / 2**20:.2f} MiB; {memory / 2**20:.2f} MiB used)")

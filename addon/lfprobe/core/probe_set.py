@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+from typing import Optional
 
 MANIFEST = "manifest.json"
 PAPER_BYTES_PER_2048_PROBE = 24.375 * 1024 * 1024  # the paper's figure: 2048² + 128² maps
@@ -26,13 +27,15 @@ def read_manifest(folder: str) -> dict:
     return manifest
 
 
-def coarse_level_bytes(resolution: int) -> int:
-    """Bytes of the min-distance levels derived on load (float32, halving to 1×1)."""
+def coarse_level_bytes(resolution: int, storage: Optional[dict] = None) -> int:
+    """Bytes of the min-distance levels derived on load, halving to 1×1: float32, or 16-bit
+    codes when the probes load with a distance step (the manifest's "storage")."""
+    per_value = 2 if storage and storage.get("distance_step") else 4
     total = 0
     n = resolution
     while n > 1:
         n = (n + 1) // 2
-        total += n * n * 4
+        total += n * n * per_value
     return total
 
 
@@ -49,7 +52,8 @@ def summarize(folder: str) -> dict:
         else:
             missing.append(probe["file"])
     resolutions = sorted({p["resolution"] for p in probes})
-    memory = sum(p.get("memory_bytes", 0) + coarse_level_bytes(p["resolution"]) for p in probes)
+    storage = manifest.get("storage")
+    memory = sum(p.get("memory_bytes", 0) + coarse_level_bytes(p["resolution"], storage) for p in probes)
     coverage = {}
     for key in ("surface", "inferred", "empty", "unknown"):
         values = [p.get("coverage", {}).get(key, 0.0) for p in probes]

@@ -464,7 +464,9 @@ def _planning_section(page, data: Dict[str, object], img) -> None:
                        "\"compact\"), what bake --auto records: 8-bit sRGB radiance, the precision of the scan's "
                        "colours; 16-bit distance in 1 mm steps, half the ~2 mm range noise of the scanner; 8+8-bit "
                        "octahedral normals, within 1° for the face test; no confidence channel, which the trace "
-                       "never reads: 7 bytes a texel). The files on disk are the same; coarse levels stay float32.",
+                       "never reads: 7 bytes a texel). The files on disk are the same. The coarse min-distance "
+                       "levels go from float32 to 16-bit codes of the same step, rounded down so that they stay "
+                       "bounds.",
                        "note")
         page.add(table(plan["storage"], [
             ("resolution", "N", num(".0f")),
