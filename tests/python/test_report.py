@@ -123,7 +123,10 @@ def test_planning_section_compares_auto_adaptive_and_bytes_per_probe(tiny_report
     fixed = [r for r in rows if r["setting"].startswith("fixed")]
     assert [(r["resolution"], r["storage"]) for r in fixed] == [
         (64, "full"), (128, "full"), (64, "compact"), (128, "compact")]
-    auto_full, auto = rows[-2:]
+    unclassified, auto_full, auto = rows[-3:]
+    # the plan's resolutions without classification: every probe kept where the grid put it
+    assert unclassified["setting"].startswith("auto resolution only") and unclassified["probes"] == 12
+    assert plan["resolution"]["unclassified_psnr"] == unclassified["psnr"]
     # bake --auto records compact storage; the same probes at full precision come with it
     assert auto["setting"].startswith("auto") and auto["probes"] == 12 and auto["storage"] == "compact"
     assert auto_full["storage"] == "full" and auto_full["resolutions"] == auto["resolutions"]

@@ -23,6 +23,7 @@ from .sweep import Sweep, aggregate, scaled_grid, setup_label
 # "Matches the best fixed resolution's error": mean PSNR over the views within this margin.
 PSNR_MATCH_DB = 0.1
 AUTO_SETTING = "auto (bake --auto: resolution from the data, classified)"
+AUTO_UNCLASSIFIED_SETTING = "auto resolution only (bake --auto --no-classify), compact storage"
 
 
 def _finite(v) -> bool:
@@ -75,18 +76,25 @@ def storage_comparison(full: List[Dict[str, object]], compact: List[Dict[str, ob
 
 def _auto_rows(ctx: RunContext, sweep: Sweep) -> List[Dict[str, object]]:
     """The planned bake (bake --auto with the CLI's defaults: compact storage) of the scene grid
-    from the densest scan, traced and measured on every view; and the same probes loaded at full
-    precision, which shows what the resolution choice alone does."""
+    from the densest scan, traced and measured on every view, with the same probes loaded at full
+    precision; and the plan's resolutions without classification (no probe moved or dropped),
+    which tells the resolution choice from the moves."""
     densest = sweep.densities[0]
     s = ctx.scene
-    folder = ctx.work_path("planning", "auto")
     placement = ProbePlacementSpec(grid_min=s.grid_min, grid_max=s.grid_max, counts=s.grid_counts)
-    start = time.perf_counter()
-    summary = pipeline.bake_from_cloud(densest.cloud, folder, placement, BakeOptions(plan={}, storage="compact"))
-    wall = time.perf_counter() - start
-    rows = [_auto_row(ctx, folder, summary, wall, storage)
-            for storage in ("full", "compact")]
-    shutil.rmtree(folder, ignore_errors=True)
+    rows = []
+    for name, plan, storages in (("unclassified", {"classify": False}, ("compact",)),
+                                 ("auto", {}, ("full", "compact"))):
+        folder = ctx.work_path("planning", name)
+        start = time.perf_counter()
+        summary = pipeline.bake_from_cloud(densest.cloud, folder, placement, BakeOptions(plan=plan, storage="compact"))
+        wall = time.perf_counter() - start
+        for storage in storages:
+            row = _auto_row(ctx, folder, summary, wall, storage)
+            if name == "unclassified":
+                row["setting"] = AUTO_UNCLASSIFIED_SETTING
+            rows.append(row)
+        shutil.rmtree(folder, ignore_errors=True)
     return rows
 
 
@@ -301,13 +309,15 @@ def run(ctx: RunContext, sweep: Sweep) -> Dict[str, object]:
     ctx.log("model only what a scene needs: auto resolution, adaptive placement")
     fixed = _fixed_rows(ctx, sweep)
     fixed_compact = _fixed_rows(ctx, sweep, COMPACT_TRACE)
-    auto_full, auto = _auto_rows(ctx, sweep)
+    unclassified, auto_full, auto = _auto_rows(ctx, sweep)
     ctx.log(f"  auto: {auto['probes']} probes, resolutions {auto['resolution_counts']}, "
             f"PSNR {auto['psnr']:.2f} dB, {auto['memory_bytes'] / 2**20:.2f} MiB compact, "
             f"{auto_full['psnr']:.2f} dB, {auto_full['memory_bytes'] / 2**20:.2f} MiB full")
-    resolution_rows = fixed + fixed_compact + [auto_full, auto]
+    resolution_rows = fixed + fixed_compact + [unclassified, auto_full, auto]
     # bake --auto (compact) against the best of every fixed resolution, stored either way.
     comparison = resolution_comparison(fixed + fixed_compact, auto)
+    comparison["unclassified_psnr"] = unclassified["psnr"]
+    comparison["unclassified_memory_bytes"] = unclassified["memory_bytes"]
     placement = placement_comparison(ctx, sweep, fixed)
     # Equal error: every scan-baked setting of the sweep (default trace, full or compact) and auto.
     scan_settings = [dict(r, memory_bytes=r["memory_bytes_per_probe"] * r["probes"])
@@ -316,7 +326,7 @@ def run(ctx: RunContext, sweep: Sweep) -> Dict[str, object]:
     for r in scan_settings:
         r["setting"] = setup_label(r) + (", compact storage" if r.get("storage") == "compact" else "")
     reference = dict(fixed[-1], setting=f"scan {sweep.densities[0].step_deg:g}°, splat + fill, {fixed[-1]['setting']}")
-    equal_error = bytes_at_equal_error(scan_settings + [auto_full, auto], reference)
+    equal_error = bytes_at_equal_error(scan_settings + [unclassified, auto_full, auto], reference)
     return {"resolution": {"rows": resolution_rows, **comparison},
             "storage": storage_comparison(fixed, fixed_compact),
             "placement": {k: v for k, v in placement.items() if k != "frames_rows"},
@@ -340,7 +350,9 @@ def findings(planning: Dict[str, object]) -> List[str]:
            "Auto does NOT match the best fixed resolution's error with no more memory ("
            + ("PSNR within the margin" if r["matches_best_error"] else f"{-r['psnr_difference_db']:.2f} dB worse")
            + ", " + ("memory no more" if r["no_more_memory"] else f"{(r['memory_ratio'] - 1) * 100:.0f} % more memory")
-           + ")."),
+           + ").")
+        + (f" The same resolutions without classification (no probe moved or dropped): "
+           f"{r['unclassified_psnr']:.2f} dB." if _finite(r.get("unclassified_psnr")) else ""),
     ]
     a, u = pl["adaptive"], pl["uniform"]
     out.append(
