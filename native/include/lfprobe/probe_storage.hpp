@@ -3,11 +3,11 @@
 // A probe is baked and written at full precision (half RGBA, float32 distance, half normals:
 // DESIGN.md §3), but a trace reads only three things per texel: the radial distance (every
 // texel it visits), and at a hit the radiance and the normal's side. Scan colours are 8-bit
-// sRGB, a scanner measures range to millimetres, and the face test needs a normal to a few
-// degree; the confidence channel is never read. The compact form keeps exactly
-// that: distance as a 16-bit multiple of a step (code 0 unknown, 65535 empty, so the three
-// texel states stay apart), radiance as 8-bit sRGB, the normal as an 8+8-bit octahedral code.
-// 7 bytes a texel against 18.
+// sRGB, a scanner measures range to millimetres, and the face test needs a normal to about a
+// degree; the confidence channel is never read. The compact form keeps exactly that: distance
+// as a 16-bit multiple of a step (code 0 unknown, 65535 empty, so the three texel states stay
+// apart), radiance as 8-bit sRGB, the normal as an 8+8-bit octahedral code: 7 bytes a texel
+// against 18. A field then holds the coarse levels in the same steps (MinDistancePyramid).
 #pragma once
 
 #include <cstddef>
