@@ -160,6 +160,16 @@ def _cmd_import(package, args) -> int:
     return EXIT_OK
 
 
+def _grids(grid_module, scene, name):
+    """The grid named `name` (BatchError when there is none), or every grid of the scene by name."""
+    if name:
+        grid_obj = scene.objects.get(name)
+        if grid_obj is None or not grid_module.is_grid(grid_obj):
+            raise BatchError(f"no probe grid named '{name}' in scene '{scene.name}'")
+        return [grid_obj]
+    return sorted((o for o in scene.objects if grid_module.is_grid(o)), key=lambda o: o.name)
+
+
 def _store_storage_options(grid, args) -> None:
     """--storage and --distance-step onto the grid (saved with it), as the panel would set them."""
     if args.distance_step is not None:
@@ -179,15 +189,9 @@ def _cmd_bake(package, args) -> int:
     grid_module = _blender_module(package, "grid")
     bake = _blender_module(package, "bake")
     scene = _scene(args.scene)
-    if args.grid:
-        grid_obj = scene.objects.get(args.grid)
-        if grid_obj is None or not grid_module.is_grid(grid_obj):
-            raise BatchError(f"no probe grid named '{args.grid}' in scene '{scene.name}'")
-        grids = [grid_obj]
-    else:
-        grids = sorted((o for o in scene.objects if grid_module.is_grid(o)), key=lambda o: o.name)
-        if not grids:
-            raise BatchError(f"scene '{scene.name}' has no probe grid to bake")
+    grids = _grids(grid_module, scene, args.grid)
+    if not grids:
+        raise BatchError(f"scene '{scene.name}' has no probe grid to bake")
     for grid_obj in grids:
         _store_storage_options(grid_obj.lfprobe_grid, args)
         try:
@@ -215,16 +219,11 @@ def _cmd_place(package, args) -> int:
     grid_module = _blender_module(package, "grid")
     place_views = _blender_module(package, "place_views")
     scene = _scene(args.scene)
-    if args.grid:
-        grid_obj = scene.objects.get(args.grid)
-        if grid_obj is None or not grid_module.is_grid(grid_obj):
-            raise BatchError(f"no probe grid named '{args.grid}' in scene '{scene.name}'")
-    else:
-        grids = sorted((o for o in scene.objects if grid_module.is_grid(o)), key=lambda o: o.name)
-        if len(grids) != 1:
-            raise BatchError(f"scene '{scene.name}' has {len(grids) or 'no'} probe grid{'' if len(grids) == 1 else 's'}"
-                             + (": pass --grid NAME" if grids else " to add probes to"))
-        grid_obj = grids[0]
+    grids = _grids(grid_module, scene, args.grid)
+    if len(grids) != 1:
+        raise BatchError(f"scene '{scene.name}' has {len(grids) or 'no'} probe grid{'' if len(grids) == 1 else 's'}"
+                         + (": pass --grid NAME" if grids else " to add probes to"))
+    grid_obj = grids[0]
     for name in args.views or ():
         _camera(scene, name)  # names the missing object or non-camera before any work
     if args.target_unknown is not None and not 0.0 <= args.target_unknown <= 1.0:

@@ -47,6 +47,16 @@ private:
     std::size_t next_ = 0;
 };
 
+// A probe's coarse levels down to `coarsest`. They bound what the trace reads: the packed
+// distances when packed, and are held in the same 16-bit steps then.
+MinDistancePyramid levels_of(const ProbeMap& map, int coarsest) {
+    MinDistancePyramid levels(decoded_distances(map), map.resolution, coarsest);
+    if (map.packed.distance_step > 0.0) {
+        levels.quantise(map.packed.distance_step);
+    }
+    return levels;
+}
+
 // Asks probe `index` about the ray from `state.free_until` on; true when it answered.
 struct FieldQuery {
     const ProbeField& field;
@@ -182,12 +192,7 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
         if (!chosen.is_full()) {
             pack_probe(map, chosen);
         }
-        // The levels bound what the trace reads: the packed distances when packed, and are
-        // held in the same 16-bit steps then.
-        field.levels_[i] = MinDistancePyramid(decoded_distances(map), map.resolution, coarsest);
-        if (map.packed.distance_step > 0.0) {
-            field.levels_[i].quantise(map.packed.distance_step);
-        }
+        field.levels_[i] = levels_of(map, coarsest);
         field.manifest_.probes[i].memory_bytes = map.memory_bytes();
         if (progress != nullptr) {
             progress->advance(1);
@@ -221,10 +226,7 @@ void ProbeField::build_levels(Progress* progress) {
         if (!probes_[i].is_complete()) {
             throw InputError("probe field: probe " + std::to_string(i) + " has no maps");
         }
-        levels_[i] = MinDistancePyramid(decoded_distances(probes_[i]), probes_[i].resolution);
-        if (probes_[i].packed.distance_step > 0.0) {
-            levels_[i].quantise(probes_[i].packed.distance_step);
-        }
+        levels_[i] = levels_of(probes_[i], 1);
         if (progress != nullptr) {
             progress->advance(1);
         }

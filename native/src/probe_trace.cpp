@@ -304,32 +304,33 @@ private:
         return kInf;
     }
 
-    // When the walk leaves coarse cell `cell` (fine texels [cell << shift, (cell+1) << shift)).
-    [[nodiscard]] double cell_exit(const OctantMap& m, const OctantCoordinate& c, int cell,
-                                   int shift) const {
-        if (c.step > 0) {
-            const int edge = (cell + 1) << shift;
-            return edge < n_ ? crossing(m, c, edge) : kInf;
-        }
-        if (c.step < 0) {
-            const int edge = cell << shift;
-            return edge > 0 ? crossing(m, c, edge) : kInf;
-        }
-        return kInf;
-    }
-
-    // The texel a walk enters when it leaves coarse cell `cell` through the edge cell_exit
-    // gave; −1 when that edge is the map's border (cell_exit is +inf there).
-    [[nodiscard]] int exit_texel(const OctantCoordinate& c, int cell, int shift) const {
+    // The texel edge through which the walk leaves coarse cell `cell` (fine texels
+    // [cell << shift, (cell+1) << shift)) in its step's direction; −1 when that edge is the
+    // map's border or the coordinate does not move.
+    [[nodiscard]] int exit_edge(const OctantCoordinate& c, int cell, int shift) const {
         if (c.step > 0) {
             const int edge = (cell + 1) << shift;
             return edge < n_ ? edge : -1;
         }
         if (c.step < 0) {
             const int edge = cell << shift;
-            return edge > 0 ? edge - 1 : -1;
+            return edge > 0 ? edge : -1;
         }
         return -1;
+    }
+
+    // When the walk leaves coarse cell `cell` (+inf through the map's border).
+    [[nodiscard]] double cell_exit(const OctantMap& m, const OctantCoordinate& c, int cell,
+                                   int shift) const {
+        const int edge = exit_edge(c, cell, shift);
+        return edge >= 0 ? crossing(m, c, edge) : kInf;
+    }
+
+    // The texel a walk enters when it leaves coarse cell `cell` through the edge cell_exit
+    // gave; −1 through the map's border (cell_exit is +inf there).
+    [[nodiscard]] int exit_texel(const OctantCoordinate& c, int cell, int shift) const {
+        const int edge = exit_edge(c, cell, shift);
+        return edge < 0 || c.step > 0 ? edge : edge - 1;
     }
 
     // The fine index after every edge crossed up to t_exit: the count of edges the ray crosses

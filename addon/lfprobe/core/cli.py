@@ -13,7 +13,7 @@ import json
 import sys
 from typing import List, Optional, Sequence
 
-from . import cli_compare, cli_mesh, cli_place, cli_report, native
+from . import cli_compare, cli_mesh, cli_place, cli_report, cli_storage, native
 from .pipeline import BakeOptions, ProbePlacementSpec, bake_from_scans
 from .probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
 from .progress import TerminalProgress
@@ -48,8 +48,7 @@ def _cmd_bake(args) -> int:
         if args.mesh:
             raise ValueError("--auto plans from scan points: use it with --scan")
         options.plan = cli_place.plan_options(args)
-    # --auto models only what the data carries, in memory too: compact unless told otherwise.
-    options.storage = args.storage or ("compact" if args.auto else None)
+    options.storage = cli_storage.bake_storage(args)
     options.distance_step = args.distance_step
     progress = None if args.quiet else TerminalProgress()
     if args.mesh:
@@ -95,34 +94,7 @@ def _print_bake_summary(args, summary: dict, source: str) -> int:
             f"{_mib(summary['bytes_on_disk'] / n)} on disk"
         )
     if summary.get("storage"):
-        print(f"  storage: {_storage_text(summary['storage'])}")
-    return 0
-
-
-def _storage_text(storage: dict) -> str:
-    """One line for a manifest's "storage" dict."""
-    step = storage.get("distance_step") or 0.0
-    if storage.get("radiance") == "half" and storage.get("normal") == "half" and not step:
-        return "full (half RGBA, float32 distance, half normals)"
-    distance = f"16-bit distance in {step * 1000:g} mm steps" if step else "float32 distance"
-    parts = [f"{storage.get('radiance')} radiance", distance, f"{storage.get('normal')} normals"]
-    if not storage.get("confidence", True):
-        parts.append("no confidence")
-    text = ", ".join(parts)
-    if "bytes_per_texel" in storage:
-        text += f" ({storage['bytes_per_texel']} bytes a texel)"
-    return text
-
-
-def _cmd_store(args) -> int:
-    _native = native.load()
-    stored = _native.set_probe_set_storage(args.folder, args.storage, distance_step=args.distance_step)
-    info = summarize(args.folder)
-    if args.json:
-        print(json.dumps({"storage": stored, "memory_bytes": info["memory_bytes"]}, indent=2))
-        return 0
-    print(f"{info['folder']}: loads as {_storage_text(stored)}; {_mib(info['memory_bytes'])} in memory "
-          f"with coarse levels ({_mib(info['memory_bytes_per_probe'])} per probe)")
+        print(f"  storage: {cli_storage.describe(summary['storage'])}")
     return 0
 
 
@@ -148,7 +120,7 @@ def _cmd_info(args) -> int:
         f"unknown {100 * c['unknown']:.2f}%, empty {100 * c['empty']:.2f}%"
     )
     if info.get("storage"):
-        print(f"  storage in memory: {_storage_text(info['storage'])}")
+        print(f"  storage in memory: {cli_storage.describe(info['storage'])}")
     per = info["memory_bytes_per_probe"]
     print(
         f"  memory: {_mib(info['memory_bytes'])} ({_mib(per)} per probe with coarse levels); "
@@ -231,13 +203,6 @@ def _cmd_bench(args) -> int:
     return bench.main(args)
 
 
-def _add_storage_arguments(parser, choices, default, text: str) -> None:
-    parser.add_argument("--storage", choices=choices, default=default, help=text)
-    parser.add_argument("--distance-step", type=float, default=0.0, metavar="M",
-                        help="compact storage: distance quantum in metres (default 0.001, half "
-                             "the ~2 mm range noise of a FARO-class scanner at 10 m)")
-
-
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="lfprobe", description="Light field probes from laser scans.")
     sub = parser.add_subparsers(dest="command", required=True)
@@ -271,19 +236,13 @@ def build_parser() -> argparse.ArgumentParser:
                            "points support (--res is then ignored), probes inside geometry or "
                            "against walls moved, useless ones dropped")
     cli_place.add_plan_arguments(bake)
-    _add_storage_arguments(bake, ["full", "compact"], None,
+    cli_storage.add_storage_arguments(bake, ["full", "compact"], None,
                            "how the probes load into memory (the files keep full precision): full "
                            "(18 bytes a texel), compact (7: 8-bit sRGB radiance, 16-bit distance, "
                            "8+8-bit normals, no confidence); default full, compact with --auto")
     bake.set_defaults(run=_cmd_bake)
 
-    store = sub.add_parser("store", help="set how a baked probe set loads into memory")
-    store.add_argument("folder", metavar="DIR")
-    store.add_argument("storage", choices=["full", "compact"])
-    store.add_argument("--distance-step", type=float, default=0.0, metavar="M",
-                       help="compact: distance quantum in metres (default 0.001)")
-    store.add_argument("--json", action="store_true")
-    store.set_defaults(run=_cmd_store)
+    cli_storage.add_parsers(sub)
 
     info = sub.add_parser("info", help="what a probe set holds")
     info.add_argument("folder", metavar="DIR")
@@ -301,7 +260,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--thickness", type=float, default=0.02, help="surface thickness (m)")
     render.add_argument("--json", action="store_true", help="print the stats as JSON")
     render.add_argument("--quiet", action="store_true")
-    _add_storage_arguments(render, ["manifest", "full", "compact"], "manifest",
+    cli_storage.add_storage_arguments(render, ["manifest", "full", "compact"], "manifest",
                            "how the probes are held in memory for this render: as the set's "
                            "manifest says, full or compact")
     render.set_defaults(run=_cmd_render)

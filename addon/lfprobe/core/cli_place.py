@@ -9,6 +9,7 @@ import json
 import os
 from collections import Counter
 
+from .cli_storage import add_storage_arguments, bake_storage
 from .pipeline import ProbePlacementSpec, load_scans, plan_probes
 from .progress import TerminalProgress
 
@@ -102,7 +103,7 @@ def _cmd_place_adaptive(args) -> int:
         resolution=args.res, plan=plan_options(args) if args.auto else None,
         target_unknown=args.target_unknown, budget_bytes=budget, max_added=args.max_added,
         threads=args.threads, log=None if args.quiet else print,
-        storage=args.storage or ("compact" if args.auto else None), distance_step=args.distance_step)
+        storage=bake_storage(args), distance_step=args.distance_step)
     data = {"scans": [os.path.abspath(p) for p in args.scan], "points": len(cloud),
             "views": [os.path.abspath(p) for p in args.views], **result.as_dict()}
     if args.out:
@@ -208,11 +209,9 @@ def add_parsers(sub) -> None:
     adaptive.add_argument("--auto", action="store_true",
                           help="plan each probe from the data instead (the planning options below)")
     adaptive.add_argument("--max-added", type=int, default=64, help="most probes added (default 64)")
-    adaptive.add_argument("--storage", choices=["full", "compact"], default=None,
-                          help="how the set loads into memory (the budget counts it so): full, or "
-                               "compact (7 bytes a texel); default full, compact with --auto")
-    adaptive.add_argument("--distance-step", type=float, default=0.0, metavar="M",
-                          help="compact storage: distance quantum in metres (default 0.001)")
+    add_storage_arguments(adaptive, ["full", "compact"], None,
+                          "how the set loads into memory (the budget counts it so): full, or "
+                          "compact (7 bytes a texel); default full, compact with --auto")
     adaptive.add_argument("--threads", type=int, default=0, help="render threads (0: every core)")
     add_plan_arguments(place)
     place.set_defaults(run=_cmd_place)

@@ -117,26 +117,20 @@ def bake_from_cloud(
     (for Blender's modal operator) instead of waiting for the summary."""
     _native = native.load()
     placement.validate()
-    kwargs = dict(
-        resolution=int(options.resolution),
-        **placement.native_kwargs(),
-        sources_json=json.dumps(list(sources)),
-        splat_scale=float(options.splat_scale),
-        hole_fill_texels=int(options.hole_fill_texels),
-        normal_neighbours=int(options.normal_neighbours),
-    )
+    where = dict(**placement.native_kwargs(), sources_json=json.dumps(list(sources)))
     if options.plan is not None:
         plan = {"resolution": int(options.resolution), "splat_scale": float(options.splat_scale),
                 "hole_fill_texels": int(options.hole_fill_texels), **options.plan}
-        job = _native.start_bake_planned_probe_set(
-            cloud, out_dir, **placement.native_kwargs(), sources_json=kwargs["sources_json"],
-            options=plan)
+        job = _native.start_bake_planned_probe_set(cloud, out_dir, **where, options=plan)
         if start_only:
             return job
         summary = job.run(progress)
-    elif start_only:
-        return _native.start_bake_probe_set(cloud, out_dir, **kwargs)
     else:
+        kwargs = dict(where, resolution=int(options.resolution), splat_scale=float(options.splat_scale),
+                      hole_fill_texels=int(options.hole_fill_texels),
+                      normal_neighbours=int(options.normal_neighbours))
+        if start_only:
+            return _native.start_bake_probe_set(cloud, out_dir, **kwargs)
         summary = _native.bake_probe_set(cloud, out_dir, progress=progress, **kwargs)
     apply_storage(out_dir, summary, options)
     return summary

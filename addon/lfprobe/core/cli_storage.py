@@ -1,0 +1,60 @@
+"""How a probe set loads into memory, on the command line: the --storage / --distance-step
+options of bake, place and render, the `store` subcommand, and one line describing a
+manifest's "storage" (see native probe_storage.hpp)."""
+
+from __future__ import annotations
+
+import json
+
+from . import native
+from .probe_set import summarize
+
+DISTANCE_STEP_HELP = ("compact storage: distance quantum in metres (default 0.001, half the ~2 mm "
+                      "range noise of a FARO-class scanner at 10 m)")
+
+
+def add_storage_arguments(parser, choices, default, text: str) -> None:
+    parser.add_argument("--storage", choices=choices, default=default, help=text)
+    parser.add_argument("--distance-step", type=float, default=0.0, metavar="M", help=DISTANCE_STEP_HELP)
+
+
+def bake_storage(args):
+    """The storage a bake records: the one asked for, else compact for --auto (it models only
+    what the data carries, in memory too), else the manifest's default (None: full)."""
+    return args.storage or ("compact" if getattr(args, "auto", False) else None)
+
+
+def describe(storage: dict) -> str:
+    """One line for a manifest's "storage" dict."""
+    step = storage.get("distance_step") or 0.0
+    if storage.get("radiance") == "half" and storage.get("normal") == "half" and not step:
+        return "full (half RGBA, float32 distance, half normals)"
+    distance = f"16-bit distance in {step * 1000:g} mm steps" if step else "float32 distance"
+    parts = [f"{storage.get('radiance')} radiance", distance, f"{storage.get('normal')} normals"]
+    if not storage.get("confidence", True):
+        parts.append("no confidence")
+    text = ", ".join(parts)
+    if "bytes_per_texel" in storage:
+        text += f" ({storage['bytes_per_texel']} bytes a texel)"
+    return text
+
+
+def _cmd_store(args) -> int:
+    stored = native.load().set_probe_set_storage(args.folder, args.storage, distance_step=args.distance_step)
+    info = summarize(args.folder)
+    if args.json:
+        print(json.dumps({"storage": stored, "memory_bytes": info["memory_bytes"]}, indent=2))
+        return 0
+    mib = 1024.0 * 1024.0
+    print(f"{info['folder']}: loads as {describe(stored)}; {info['memory_bytes'] / mib:.2f} MiB in memory "
+          f"with coarse levels ({info['memory_bytes_per_probe'] / mib:.2f} MiB per probe)")
+    return 0
+
+
+def add_parsers(sub) -> None:
+    store = sub.add_parser("store", help="set how a baked probe set loads into memory")
+    store.add_argument("folder", metavar="DIR")
+    store.add_argument("storage", choices=["full", "compact"])
+    store.add_argument("--distance-step", type=float, default=0.0, metavar="M", help=DISTANCE_STEP_HELP)
+    store.add_argument("--json", action="store_true")
+    store.set_defaults(run=_cmd_store)
