@@ -57,19 +57,41 @@ float min_texel_angle(int n) {
     return smallest;
 }
 
-// Depth along a texel's ray where it meets the point's surfel plane: exact for planar
-// surfaces and consistent between neighbouring texels. Too grazing a plane, or one that puts the
-// surface implausibly far from the point, falls back to the point's own radial distance.
+// Depth along a texel's ray where it meets the point's surfel plane: exact for planar surfaces
+// and consistent between neighbouring texels. A plane too grazing to extrapolate from, or one
+// that puts the surface implausibly far from the point (beyond half to twice its distance, and
+// outside the splat's disc of `reach`), falls back to the point's own radial distance.
 float surfel_depth(const glm::vec3& normal, const glm::vec3& v, float dist,
-                   const glm::vec3& texel_dir) {
+                   const glm::vec3& texel_dir, float reach) {
     const float cos_plane = glm::dot(normal, texel_dir);
     if (std::abs(cos_plane) >= kMinPlaneCosine) {
         const float s = glm::dot(normal, v) / cos_plane;
         if (s > 0.5f * dist && s < 2.0f * dist) {
             return s;
         }
+        const glm::vec3 off = s * texel_dir - v;
+        if (s > 0.0f && glm::dot(off, off) <= reach * reach) {
+            return s;
+        }
     }
     return dist;
+}
+
+// True when the ray from the probe centre along unit `texel_dir` meets the disc of `radius`
+// around `v` in the plane with unit `normal` (normal_v = normal · v). An unoriented normal
+// gives the same answer either way round.
+bool ray_meets_disc(const glm::vec3& texel_dir, const glm::vec3& v, const glm::vec3& normal,
+                    float normal_v, float radius) {
+    const float cos_plane = glm::dot(normal, texel_dir);
+    if (cos_plane == 0.0f) {
+        return false; // parallel to the plane: the disc is seen edge-on, as a line
+    }
+    const float s = normal_v / cos_plane;
+    if (!(s > 0.0f)) {
+        return false;
+    }
+    const glm::vec3 off = s * texel_dir - v;
+    return glm::dot(off, off) <= radius * radius;
 }
 
 void keep_smaller(std::uint32_t& slot, std::uint32_t value) {
@@ -102,6 +124,9 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     if (n < 2 || n > 16384) {
         throw InputError("bake: resolution must be between 2 and 16384, got " + std::to_string(n));
     }
+    if (!(settings.splat_plane_reach > 0.0f) || !std::isfinite(settings.splat_plane_reach)) {
+        throw InputError("bake: splat_plane_reach must be a positive number of splat radii");
+    }
     if (cloud.size() > std::numeric_limits<std::uint32_t>::max()) {
         throw InputError("bake: at most 2^32-1 points per cloud");
     }
@@ -129,7 +154,13 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
         const glm::vec3 normal = geometry.normals[i];
         return !geometry.oriented[i] && glm::dot(normal, v) > 0.0f ? -normal : normal;
     };
-    // Calls visit(texel, texel_dir, v, dist, dir) for every texel point i's splat covers.
+    // How far from point i its splat's plane is used: the disc a neighbouring texel must meet.
+    auto plane_reach = [&](std::size_t i) {
+        return settings.splat_plane_reach * settings.splat_scale * geometry.spacing[i];
+    };
+    // Calls visit(texel, texel_dir, v, dist, dir) for every texel point i's splat covers: the
+    // texels in the cone of the splat radius seen face-on whose ray meets the point's surface
+    // plane within splat_plane_reach splat radii of the point (BakeSettings says why).
     auto for_each_splat_texel = [&](std::size_t i, auto&& visit) {
         const glm::vec3 v = glm::vec3(glm::dvec3(cloud.positions[i]) - centre);
         const float dist = glm::length(v);
@@ -138,8 +169,12 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
         }
         const glm::vec3 dir = v / dist;
         const oct::Texel home = oct::texel_of_direction(dir, n);
-        const float alpha = std::atan2(settings.splat_scale * geometry.spacing[i], dist);
+        const float radius = settings.splat_scale * geometry.spacing[i];
+        const float alpha = std::atan2(radius, dist);
         const float cos_alpha = std::cos(alpha);
+        const glm::vec3& normal = geometry.normals[i];
+        const float normal_v = glm::dot(normal, v);
+        const float reach = plane_reach(i);
         // A neighbour k texels away lies at least (k - 0.5) texel angles from `dir`.
         const int r = std::min(max_radius, static_cast<int>(std::ceil(alpha / texel_angle + 0.5f)));
         for (int dy = -r; dy <= r; ++dy) {
@@ -147,8 +182,11 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
                 const std::size_t t =
                     oct::texel_index(oct::wrap_texel(home.x + dx, home.y + dy, n), n);
                 const glm::vec3& texel_dir = directions[t];
-                // The point always claims its own texel; neighbours only inside its footprint.
-                if ((dx != 0 || dy != 0) && glm::dot(texel_dir, dir) < cos_alpha) {
+                // The point always claims its own texel; neighbours only inside its cone where
+                // their ray meets the point's surface plane near the point.
+                if ((dx != 0 || dy != 0) &&
+                    (glm::dot(texel_dir, dir) < cos_alpha ||
+                     !ray_meets_disc(texel_dir, v, normal, normal_v, reach))) {
                     continue;
                 }
                 visit(t, texel_dir, v, dist, dir);
@@ -182,7 +220,7 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     over_points("splatting points: depth", [&](std::size_t i) {
         for_each_splat_texel(i, [&](std::size_t t, const glm::vec3& texel_dir, const glm::vec3& v,
                                     float dist, const glm::vec3&) {
-            const float depth = surfel_depth(normal_of(i, v), v, dist, texel_dir);
+            const float depth = surfel_depth(normal_of(i, v), v, dist, texel_dir, plane_reach(i));
             keep_smaller(front[t], ordered_bits(depth));
         });
     });
@@ -194,7 +232,7 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
         const float thickness = geometry.spacing[i];
         for_each_splat_texel(i, [&](std::size_t t, const glm::vec3& texel_dir, const glm::vec3& v,
                                     float dist, const glm::vec3& dir) {
-            const float depth = surfel_depth(normal_of(i, v), v, dist, texel_dir);
+            const float depth = surfel_depth(normal_of(i, v), v, dist, texel_dir, plane_reach(i));
             const float nearest = std::bit_cast<float>(front[t]);
             if (depth > nearest + std::max(thickness, 1e-3f * nearest)) {
                 return;
@@ -227,8 +265,8 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
         }
         const glm::vec3 v = glm::vec3(glm::dvec3(cloud.positions[i]) - centre);
         const glm::vec3 normal = normal_of(i, v);
-        map.set_surface(t, surfel_depth(normal, v, glm::length(v), directions[t]), rgb, normal,
-                        1.0f);
+        map.set_surface(t, surfel_depth(normal, v, glm::length(v), directions[t], plane_reach(i)),
+                        rgb, normal, 1.0f);
     });
     if (progress != nullptr) {
         progress->throw_if_cancelled();

@@ -185,6 +185,7 @@ BakeSummary bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry&
                          {"resolution", "per probe (planned)"},
                          {"splat_scale", settings.bake.splat_scale},
                          {"max_splat_radius_texels", settings.bake.max_splat_radius_texels},
+                         {"splat_plane_reach", settings.bake.splat_plane_reach},
                          {"hole_fill_texels", settings.bake.hole_fill_texels},
                          {"points", cloud.size()},
                          {"resolution_rule",

@@ -282,6 +282,7 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
                          {"resolution", settings.resolution},
                          {"splat_scale", settings.splat_scale},
                          {"max_splat_radius_texels", settings.max_splat_radius_texels},
+                         {"splat_plane_reach", settings.splat_plane_reach},
                          {"hole_fill_texels", settings.hole_fill_texels},
                          {"min_distance", settings.min_distance},
                          {"normal_neighbours", geometry_options.normal_neighbours},

@@ -137,6 +137,112 @@ TEST(ProbeBake, NothingBehindASurfaceShowsThroughIt) {
     EXPECT_GT(without, 0.5); // the paper's aliasing, reproduced without splats
 }
 
+namespace {
+
+// A wall of points on the plane x = `x` (normal along x), pitch `pitch_y` × `pitch_z`, seen by
+// a scanner at the origin.
+void add_wall_x(PointCloud& cloud, float x, float pitch_y, float pitch_z, float half_extent) {
+    const int ny = static_cast<int>(2.0f * half_extent / pitch_y) + 1;
+    const int nz = static_cast<int>(2.0f * half_extent / pitch_z) + 1;
+    for (int i = 0; i < ny; ++i) {
+        for (int j = 0; j < nz; ++j) {
+            cloud.positions.emplace_back(x, -half_extent + static_cast<float>(i) * pitch_y,
+                                         -half_extent + static_cast<float>(j) * pitch_z);
+            cloud.colors.emplace_back(0.5f);
+            cloud.scan_index.push_back(0);
+        }
+    }
+}
+
+} // namespace
+
+TEST(ProbeBake, AWallBesideTheProbeHidesNothingPastItsPlane) {
+    // The probe 1.5 cm in front of a wall (the hard scene's probe beside a pillar), a far wall
+    // behind it. Points on the near wall 1.5–30 cm away have splat cones tens of degrees wide;
+    // a cone alone paints their depth over directions past the wall's plane, which then hide
+    // the far wall from every ray that passes there.
+    PointCloud cloud;
+    add_wall_x(cloud, 0.015f, 0.02f, 0.02f, 1.5f);
+    add_wall_x(cloud, -2.0f, 0.04f, 0.04f, 4.0f);
+    cloud.scans.push_back(ScanSource{"walls", cloud.positions.size(), glm::dvec3(0.0), true});
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    BakeSettings settings;
+    settings.resolution = 64;
+    settings.hole_fill_texels = 0;
+    const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+    std::size_t past = 0;
+    std::size_t false_occluders = 0;
+    std::size_t in_front = 0;
+    std::size_t on_the_wall = 0;
+    for (int y = 0; y < map.resolution; ++y) {
+        for (int x = 0; x < map.resolution; ++x) {
+            const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
+            const float dist = map.distance[oct::texel_index({x, y}, map.resolution)];
+            if (d.x < -0.1f) { // past the near wall's plane by more than ~6°
+                ++past;
+                false_occluders += dist < 1.0f ? 1 : 0;
+            } else if (d.x > 0.1f) { // toward the near wall, well inside its extent
+                ++in_front;
+                const float truth = 0.015f / d.x;
+                on_the_wall += std::abs(dist - truth) < 0.005f + 0.05f * truth ? 1 : 0;
+            }
+        }
+    }
+    std::printf("past the wall's plane: %zu of %zu texels nearer than 1 m; toward the wall: %zu of "
+                "%zu texels on it\n",
+                false_occluders, past, on_the_wall, in_front);
+    EXPECT_EQ(false_occluders, 0u);
+    EXPECT_EQ(on_the_wall, in_front);
+}
+
+TEST(ProbeBake, ObliqueScanLinesLeaveNoHoles) {
+    // A floor scanned at oblique incidence: rows 1 cm apart, points along a row 4 cm apart
+    // (the beam's spacing grows as 1/cos of the incidence). The mean neighbour distance is
+    // nearer the short pitch, so a splat of one splat radius in the surface's plane would not
+    // reach across the long one; splat_plane_reach = 2 does.
+    PointCloud cloud;
+    add_wall_x(cloud, 1.0f, 0.01f, 0.04f, 1.0f);
+    cloud.scans.push_back(ScanSource{"floor", cloud.positions.size(), glm::dvec3(0.0), true});
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    auto holes = [&](float reach) {
+        BakeSettings settings;
+        settings.resolution = 512;
+        settings.hole_fill_texels = 0;
+        settings.splat_plane_reach = reach;
+        // Seen at a glancing angle along the long pitch (as the floor is from a probe at eye
+        // height), where the splat cone is wide enough to span the gap between rows.
+        const ProbeMap map =
+            bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.6, 0.0, -1.5), settings);
+        std::size_t inside = 0;
+        std::size_t unknown = 0;
+        for (int y = 0; y < map.resolution; ++y) {
+            for (int x = 0; x < map.resolution; ++x) {
+                const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
+                if (d.x <= 0.0f) {
+                    continue;
+                }
+                const glm::vec3 on_plane = glm::vec3(0.6f, 0.0f, -1.5f) + d * (0.4f / d.x);
+                if (std::abs(on_plane.y) > 0.9f || std::abs(on_plane.z) > 0.9f) {
+                    continue;
+                }
+                ++inside;
+                unknown +=
+                    std::isnan(map.distance[oct::texel_index({x, y}, map.resolution)]) ? 1 : 0;
+            }
+        }
+        return static_cast<double>(unknown) / static_cast<double>(inside);
+    };
+    const double one = holes(1.0f);
+    const double two = holes(2.0f);
+    std::printf("holes on an obliquely scanned floor: %.4f at one splat radius, %.4f at two\n", one,
+                two);
+    EXPECT_EQ(two, 0.0);
+    EXPECT_GT(one, 0.01);
+    BakeSettings bad;
+    bad.splat_plane_reach = 0.0f;
+    EXPECT_THROW((void)bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), bad), InputError);
+}
+
 TEST(ProbeBake, SmallHolesAreInferredAndLargeHolesStayUnknown) {
     ProbeMap map(64, glm::dvec3(0.0));
     for (std::size_t i = 0; i < map.texel_count(); ++i) {

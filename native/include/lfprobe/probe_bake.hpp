@@ -19,6 +19,14 @@ struct BakeSettings {
     // Splat radius as a multiple of the local point spacing. 0.8 of the mean distance to six
     // neighbours covers a square sampling pattern (which needs 0.71 of its pitch) with margin.
     float splat_scale = 0.8f;
+    // A neighbouring texel takes a point's splat only where its ray meets the point's surface
+    // plane within this many splat radii of the point. The splat cone alone would paint a
+    // surface seen edge-on over the directions that pass beside it: a probe next to a wall or
+    // a pillar would hide everything near the wall's plane behind false occluders, as wide as
+    // the cone (wider the coarser the map). A disc of one splat radius opens holes instead,
+    // between scan lines whose spacing along the scanner's beam grows at oblique incidence
+    // beyond the mean neighbour distance; two radii close them (measured on the demo scenes).
+    float splat_plane_reach = 2.0f;
     // Largest splat radius in texels; bounds the cost of points very close to a probe.
     int max_splat_radius_texels = 64;
     // Holes up to this many texels across are filled and marked inferred; larger stay unknown.
