@@ -29,9 +29,9 @@ def test_place_moves_a_probe_off_the_wall_and_sizes_by_density(room):
     assert wall_probe["found"] == "too_close" and wall_probe["moved"]
     assert wall_probe["position"][0] < 1.999
     # 4 cm pitch seen from ~1.5–2 m: N ≈ 3.54 · r / s ≈ 130–180 at one texel per point, and
-    # twice that at the default two texels per point spacing: the 256 or 384 step.
+    # 2.5 times that at the default 2.5 texels per point spacing: the 384 or 512 step.
     assert 100 < open_probe["data_resolution"] < 260
-    assert open_probe["resolution"] in (192, 256, 384)
+    assert open_probe["resolution"] in (256, 384, 512)
     one_per_point = json.loads(run_cli("place", "--scan", room["scan"], "--scanner", 0, 0, 1.25,
                                        "--probe", 0, 0, 1.25, "--no-cache", "--samples-per-spacing", 1,
                                        "--json", "--quiet", check=True).stdout)

@@ -24,9 +24,9 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
                             "resolution; 0 = as fine as the data supports")
     group.add_argument("--quantile", type=float, default=0.5,
                        help="quantile of the per-direction supported resolutions (0.5: median)")
-    group.add_argument("--samples-per-spacing", type=float, default=2.0, metavar="K",
-                       help="texels per point spacing along each axis (default 2: the splatted "
-                            "surface sampled at twice its point density)")
+    group.add_argument("--samples-per-spacing", type=float, default=2.5, metavar="K",
+                       help="texels per point spacing along each axis (default 2.5: the splatted "
+                            "surface sampled finer than twice its point density)")
     group.add_argument("--clearance", type=float, default=0.05, metavar="M",
                        help="a probe with surfaces nearer than this is too close")
     group.add_argument("--max-move", type=float, default=0.0, metavar="M",

@@ -9,10 +9,13 @@
 //
 // The chosen N samples the data at `samples_per_spacing` texels per point spacing along each
 // axis: a baked probe holds the splatted surface (each point a disc of its spacing), and a
-// surface known at spacing s needs samples every s/2 to keep the detail between its points
-// (the sampling rate of the point pattern). One texel per point (factor 1) loses that detail:
-// on the demo's lab room at a 1° scan, 512² maps beat 256² by 0.4 dB from the same points,
-// while 1024² adds only 0.06 dB more.
+// surface known at spacing s needs samples every s/2 or finer to keep the detail between its
+// points and the edges of its discs. One texel per point (factor 1) loses that detail. The
+// default 2.5 is measured on the demo scenes (report preset demo): since splats are cut to
+// their surface's plane (probe_bake.hpp), silhouettes are sharp and finer maps gain more (lab
+// room, 1° scan: 256² 16.65, 512² 17.28, 1024² 17.42 dB). Factor 2 (mostly 512²) fell
+// 0.13 dB short of 1024²; 2.5 (mostly 768²) is within 0.05 dB, and on the hard scene, where
+// 512² is best, it chooses 512².
 #pragma once
 
 #include <cstddef>
@@ -29,7 +32,7 @@ struct ResolutionSettings {
     int min_resolution = 64;
     int max_resolution = 4096;
     double quantile = 0.5;            // of the per-direction supported resolutions
-    double samples_per_spacing = 2.0; // texels per point spacing, along each axis
+    double samples_per_spacing = 2.5; // texels per point spacing, along each axis
     double footprint = 0.0;           // metres per texel wanted at the median distance; 0: no cap
     int survey_resolution = 256;      // the map the front-most points are found in
 };
