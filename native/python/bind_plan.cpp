@@ -43,6 +43,10 @@ PlanSettings plan_settings_from(const py::dict& options) {
             s.resolution.samples_per_spacing = v.cast<double>();
         } else if (key == "classify") {
             s.classify = v.cast<bool>();
+        } else if (key == "partly_unknown") {
+            s.partly_unknown = v.cast<double>();
+        } else if (key == "min_coverage_gain") {
+            s.min_coverage_gain = v.cast<double>();
         } else if (key == "clearance") {
             s.classes.clearance = v.cast<double>();
         } else if (key == "cell_reach") {
@@ -62,7 +66,8 @@ PlanSettings plan_settings_from(const py::dict& options) {
                 "plan: unknown option '" + key +
                 "' (expected auto_resolution, resolution, min_resolution, "
                 "max_resolution, footprint, quantile, samples_per_spacing, classify, clearance, "
-                "cell_reach, max_move, drop, classify_resolution, splat_scale, "
+                "cell_reach, max_move, partly_unknown, min_coverage_gain, drop, "
+                "classify_resolution, splat_scale, "
                 "hole_fill_texels)");
         }
     }

@@ -38,21 +38,25 @@ ProbeClassification classify_probe(const ProbeMap& map, const ClassificationSett
     glm::dvec3 near_sum(0.0);
     glm::dvec3 far_sum(0.0);
     std::size_t far = 0;
+    glm::dvec3 known_sum(0.0);
+    glm::dvec3 unknown_sum(0.0);
     ProbeClassification c;
     for (int y = 0; y < n; ++y) {
         for (int x = 0; x < n; ++x) {
             const std::size_t i = oct::texel_index({x, y}, n);
             const float r = map.distance[i];
+            const glm::dvec3 d(oct::texel_direction({x, y}, n));
             if (std::isnan(r)) {
                 ++unknown;
+                unknown_sum += d;
                 continue;
             }
+            known_sum += d;
             if (std::isinf(r)) {
                 ++empty;
                 continue;
             }
             ++surface;
-            const glm::dvec3 d(oct::texel_direction({x, y}, n));
             // The probe sees the back of a surface whose normal points away from it.
             if (glm::dot(glm::dvec3(map.normal_at(i)), d) > 0.0) {
                 ++back;
@@ -87,6 +91,13 @@ ProbeClassification classify_probe(const ProbeMap& map, const ClassificationSett
         }
         if (glm::length(away) > 1e-6) {
             c.away_from_near = glm::normalize(away);
+        }
+    }
+    if (unknown > 0 && surface + empty > 0) {
+        const glm::dvec3 toward = known_sum / static_cast<double>(surface + empty) -
+                                  unknown_sum / static_cast<double>(unknown);
+        if (glm::length(toward) > 1e-6) {
+            c.toward_known = glm::normalize(toward);
         }
     }
     if (surface > 0 && c.back_face_fraction > settings.inside_back_face_fraction) {

@@ -21,12 +21,16 @@ json vec_json(const glm::dvec3& v) {
     return json::array({v.x, v.y, v.z});
 }
 
-bool needs_move(ProbeClass c) {
-    return c == ProbeClass::Inside || c == ProbeClass::TooClose;
+// Inside and too close by class; a useful probe that sees much of its sphere unknown may see
+// more a little further on (a probe on a wall's plane, with the unscanned side behind it).
+bool needs_move(const ProbeClassification& c, double partly_unknown) {
+    return c.kind == ProbeClass::Inside || c.kind == ProbeClass::TooClose ||
+           (c.kind == ProbeClass::Useful && c.unknown_fraction > partly_unknown);
 }
 
+// A too-close probe that stays where it is still holds its surroundings: kept, not dropped.
 bool worth_keeping(ProbeClass c) {
-    return c == ProbeClass::Useful;
+    return c == ProbeClass::Useful || c == ProbeClass::TooClose;
 }
 
 ProbeClassification quick_classify(const PointCloud& cloud, const LocalGeometry& geometry,
@@ -131,12 +135,19 @@ ProbePlan plan_probes(const PointCloud& cloud, const LocalGeometry& geometry,
         if (settings.classify) {
             p.classification = quick_classify(cloud, geometry, p.position, settings, classes);
             p.found = p.classification.kind;
-            for (int move = 0; move < kMaxMoves && needs_move(p.classification.kind); ++move) {
+            const ProbeClassification found = p.classification;
+            for (int move = 0;
+                 move < kMaxMoves && needs_move(p.classification, settings.partly_unknown);
+                 ++move) {
                 const ProbeClassification& c = p.classification;
                 // Inside: out through the nearest surface. Too close: away from the near side.
-                glm::dvec3 step = c.kind == ProbeClass::Inside
-                                      ? c.toward_nearest * (c.nearest_surface + classes.clearance)
-                                      : c.away_from_near * classes.clearance;
+                // Partly unknown: toward what it sees.
+                glm::dvec3 step = c.toward_known * classes.clearance;
+                if (c.kind == ProbeClass::Inside) {
+                    step = c.toward_nearest * (c.nearest_surface + classes.clearance);
+                } else if (c.kind == ProbeClass::TooClose) {
+                    step = c.away_from_near * classes.clearance;
+                }
                 if (glm::length(step) == 0.0) {
                     break;
                 }
@@ -147,6 +158,14 @@ ProbePlan plan_probes(const PointCloud& cloud, const LocalGeometry& geometry,
                 p.position = candidate;
                 p.moved = true;
                 p.classification = quick_classify(cloud, geometry, p.position, settings, classes);
+            }
+            // Out of an object always; elsewhere only where the probe then sees more.
+            if (p.moved && p.found != ProbeClass::Inside &&
+                !(found.unknown_fraction - p.classification.unknown_fraction >=
+                  settings.min_coverage_gain)) {
+                p.position = p.original;
+                p.moved = false;
+                p.classification = found;
             }
             p.kind = p.classification.kind;
             p.dropped = settings.drop && !worth_keeping(p.kind);

@@ -142,6 +142,43 @@ TEST(ProbePlan, MovesOrDropsWhatIsNotUseful) {
     EXPECT_EQ(bounded.probes[0].resolution, 8);
 }
 
+TEST(ProbePlan, AProbeBesideASurfaceStaysWhereItSeesEverything) {
+    // 1.5 cm in front of the box's +x face (the hard scene's probe beside a pillar): too close,
+    // but it sees the face and the room whole; a move would gain nothing, so it stays, kept.
+    const glm::dvec3 at(kBoxCentre.x + kBoxHalf + 0.015, kBoxCentre.y, kBoxCentre.z);
+    PlanSettings settings;
+    settings.auto_resolution = false;
+    settings.fixed_resolution = 32;
+    const ProbePlan plan = plan_probes(scene().cloud, scene().geometry,
+                                       ProbePlacement::from_positions({at}), settings);
+    const PlannedProbe& p = plan.probes[0];
+    EXPECT_EQ(p.found, ProbeClass::TooClose);
+    EXPECT_EQ(p.kind, ProbeClass::TooClose);
+    EXPECT_LT(p.classification.unknown_fraction, settings.min_coverage_gain);
+    EXPECT_FALSE(p.moved);
+    EXPECT_FALSE(p.dropped);
+    EXPECT_EQ(p.position, at);
+    EXPECT_EQ(p.resolution, 32);
+}
+
+TEST(ProbePlan, AProbeOnAWallsPlaneMovesTowardWhatItSees) {
+    // On the plane of the wall x = 2: the wall is seen edge-on and the side behind it, never
+    // scanned, is unknown: half the sphere. A step into the room lets it see the wall.
+    const glm::dvec3 at(2.0, 0.31, 1.13);
+    PlanSettings settings;
+    settings.auto_resolution = false;
+    settings.max_move = 0.3;
+    const ProbePlan plan = plan_probes(scene().cloud, scene().geometry,
+                                       ProbePlacement::from_positions({at}), settings);
+    const PlannedProbe& p = plan.probes[0];
+    EXPECT_TRUE(p.moved);
+    EXPECT_LT(p.position.x, 2.0);
+    EXPECT_NEAR(p.position.y, at.y, 0.01);
+    EXPECT_NEAR(p.position.z, at.z, 0.01);
+    EXPECT_EQ(p.kind, ProbeClass::Useful);
+    EXPECT_LT(p.classification.unknown_fraction, 0.01);
+}
+
 TEST(ProbeResolution, DoublingTheDensityDoublesTheSupportedResolution) {
     // The same room at 4 cm and 2 cm pitch, probe in the middle: N ≈ sqrt(4π)·r/s.
     const PointCloud coarse = BoxRoomScene{}.cloud(0.04f, kRoomScanner);

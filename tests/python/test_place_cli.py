@@ -1,5 +1,6 @@
-"""`lfprobe place` and `lfprobe bake --auto`: resolution from the data, probes moved off walls,
-the plan in the manifest, and the planned set traced like any other."""
+"""`lfprobe place` and `lfprobe bake --auto`: resolution from the data, probes moved off walls
+where that lets them see more, the plan in the manifest, and the planned set traced like any
+other."""
 
 import json
 
@@ -54,7 +55,14 @@ def test_bake_auto_writes_the_plan_and_renders(room, native):
     for record, planned in zip(manifest["probes"], plan):
         assert record["resolution"] == planned["resolution"]
         assert record["position"] == pytest.approx(planned["position"])
-    assert any(p["moved"] for p in plan)  # the two probes at x = 1.999 are moved off the wall
+    # The two probes at x = 1.999 are too close to the wall; a move would not let them see more
+    # (the wall is scanned right up to them), so they are kept where they are, not dropped.
+    wall = [p for p in plan if p["original"][0] > 1.99]
+    assert len(wall) == 2
+    for p in wall:
+        assert p["found"] == "too_close" and not p["dropped"]
+        assert p["moved"] or p["class"] == "too_close"
+        assert p["moved"] or p["classification"]["unknown"] < 0.01
     # --auto models only what the data carries in memory too: compact storage unless told otherwise
     assert manifest["storage"] == {"radiance": "srgb8", "normal": "oct16", "distance_step": 0.001,
                                    "confidence": False}

@@ -1,6 +1,7 @@
 """`lfprobe place` and the planning options of `lfprobe bake --auto`: per-probe resolution
-chosen from the data, probes inside geometry or against walls moved or dropped; with --views,
-probes added greedily where the given views trace UNKNOWN (lfprobe.core.adaptive)."""
+chosen from the data, probes inside geometry moved or dropped, probes against walls moved where
+that lets them see more; with --views, probes added greedily where the given views trace UNKNOWN
+(lfprobe.core.adaptive)."""
 
 from __future__ import annotations
 
@@ -164,6 +165,8 @@ def _cmd_place(args) -> int:
     for i, p in enumerate(probes):
         x, y, z = p["position"]
         note = " (dropped)" if p["dropped"] else (f" (moved {p['moved_by']:.3f} m)" if p["moved"] else "")
+        if not note and p["class"] == "too_close":
+            note = " (kept: a move would not let it see more)"
         supported = f", data supports {p['data_resolution']:.0f}" if p["data_resolution"] else ""
         print(f"  {i:3d}: ({x:.3f}, {y:.3f}, {z:.3f}) {p['found']}→{p['class']}{note}, "
               f"{p['resolution']}²{supported}")

@@ -47,6 +47,9 @@ struct ProbeClassification {
     // Unit direction toward the open side: the mean direction of the farther surface texels
     // minus that of the near ones; zero when none is near.
     glm::dvec3 away_from_near{0.0};
+    // Unit direction toward what the probe sees: the mean direction of its measured texels
+    // (surface or empty) minus that of its unknown ones; zero when none is unknown.
+    glm::dvec3 toward_known{0.0};
 };
 
 [[nodiscard]] ProbeClassification classify_probe(const ProbeMap& map,
