@@ -175,6 +175,8 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
         const glm::vec3& normal = geometry.normals[i];
         const float normal_v = glm::dot(normal, v);
         const float reach = plane_reach(i);
+        // A point with no surface (too few neighbours for a normal) keeps the whole cone.
+        const bool has_plane = glm::dot(normal, normal) > 0.0f;
         // A neighbour k texels away lies at least (k - 0.5) texel angles from `dir`.
         const int r = std::min(max_radius, static_cast<int>(std::ceil(alpha / texel_angle + 0.5f)));
         for (int dy = -r; dy <= r; ++dy) {
@@ -186,7 +188,7 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
                 // their ray meets the point's surface plane near the point.
                 if ((dx != 0 || dy != 0) &&
                     (glm::dot(texel_dir, dir) < cos_alpha ||
-                     !ray_meets_disc(texel_dir, v, normal, normal_v, reach))) {
+                     (has_plane && !ray_meets_disc(texel_dir, v, normal, normal_v, reach)))) {
                     continue;
                 }
                 visit(t, texel_dir, v, dist, dir);

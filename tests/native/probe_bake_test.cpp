@@ -243,6 +243,28 @@ TEST(ProbeBake, ObliqueScanLinesLeaveNoHoles) {
     EXPECT_THROW((void)bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), bad), InputError);
 }
 
+TEST(ProbeBake, APointWithoutANormalKeepsItsWholeSplat) {
+    // Two points 10 cm apart, 1 m away: too few neighbours for a normal, so no plane to cut the
+    // splat to; each still covers the texels of its disc seen face-on.
+    PointCloud cloud;
+    cloud.positions = {{1.0f, 0.0f, 0.0f}, {1.0f, 0.1f, 0.0f}};
+    cloud.colors = {glm::vec3(0.5f), glm::vec3(0.5f)};
+    cloud.scan_index = {0, 0};
+    cloud.scans.push_back(ScanSource{"two points", 2, glm::dvec3(0.0), true});
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    ASSERT_EQ(glm::dot(geometry.normals[0], geometry.normals[0]), 0.0f);
+    BakeSettings settings;
+    settings.resolution = 256;
+    settings.hole_fill_texels = 0;
+    const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+    std::size_t covered = 0;
+    for (std::size_t i = 0; i < map.texel_count(); ++i) {
+        covered += std::isfinite(map.distance[i]) ? 1 : 0;
+    }
+    // A disc of 0.8 × 10 cm at 1 m spans ~4.6° in radius; a 256² texel is ~0.8°: dozens each.
+    EXPECT_GT(covered, 40u);
+}
+
 TEST(ProbeBake, SmallHolesAreInferredAndLargeHolesStayUnknown) {
     ProbeMap map(64, glm::dvec3(0.0));
     for (std::size_t i = 0; i < map.texel_count(); ++i) {
