@@ -574,7 +574,9 @@ ProbeLookup::ProbeLookup(const ProbeMap& map, const TraceSettings& settings)
 ProbeTraceResult ProbeLookup::lookup(const glm::dvec3& direction, double t_min,
                                      double t_max) const {
     ProbeTraceResult result;
-    judge(aim(direction), t_min, t_max, result);
+    Aim a;
+    aim(direction, a);
+    judge(a, t_min, t_max, result);
     return result;
 }
 
@@ -584,7 +586,7 @@ void ProbeLookup::lookup_batch(const Ray* rays, std::size_t count,
     for (std::size_t first = 0; first < count; first += kBatch) {
         const std::size_t size = std::min(kBatch, count - first);
         for (std::size_t k = 0; k < size; ++k) {
-            aims[k] = aim(rays[first + k].direction);
+            aim(rays[first + k].direction, aims[k]);
             prefetch(aims[k].index);
         }
         for (std::size_t k = 0; k < size; ++k) {
@@ -594,11 +596,16 @@ void ProbeLookup::lookup_batch(const Ray* rays, std::size_t count,
     }
 }
 
-ProbeLookup::Aim ProbeLookup::aim(const glm::dvec3& direction) const {
-    check_direction(direction);
-    const glm::dvec3 d = glm::normalize(direction);
-    const oct::Texel texel = oct::texel_of_direction(glm::vec3(d), n_);
-    return Aim{d, texel, oct::texel_index(texel, n_)};
+void ProbeLookup::aim(const glm::dvec3& direction, Aim& aim) const {
+    // A finite positive squared length is the common case of check_direction's test, in one
+    // comparison; anything else goes to the full test and its error.
+    const double length2 = glm::dot(direction, direction);
+    if (!(length2 > 0.0 && length2 < kInf)) {
+        check_direction(direction);
+    }
+    aim.d = glm::normalize(direction);
+    aim.texel = oct::texel_of_direction(glm::vec3(aim.d), n_);
+    aim.index = oct::texel_index(aim.texel, n_);
 }
 
 void ProbeLookup::prefetch(std::size_t index) const {

@@ -107,7 +107,9 @@ private:
         oct::Texel texel;
         std::size_t index;
     };
-    [[nodiscard]] Aim aim(const glm::dvec3& direction) const;
+    // Written in place, as judge's results are: a batch's aims are not copied through
+    // temporaries.
+    void aim(const glm::dvec3& direction, Aim& aim) const;
     void prefetch(std::size_t index) const;
     void judge(const Aim& aim, double t_min, double t_max, ProbeTraceResult& result) const;
 
