@@ -571,32 +571,8 @@ ProbeLookup::ProbeLookup(const ProbeMap& map, const TraceSettings& settings)
                  Channel{radiance, radiance_stride}};
 }
 
-ProbeTraceResult ProbeLookup::lookup(const glm::dvec3& direction, double t_min,
-                                     double t_max) const {
-    ProbeTraceResult result;
-    Aim a;
-    aim(direction, a);
-    judge(a, t_min, t_max, result);
-    return result;
-}
-
-void ProbeLookup::lookup_batch(const Ray* rays, std::size_t count,
-                               ProbeTraceResult* results) const {
-    std::array<Aim, kBatch> aims;
-    for (std::size_t first = 0; first < count; first += kBatch) {
-        const std::size_t size = std::min(kBatch, count - first);
-        for (std::size_t k = 0; k < size; ++k) {
-            aim(rays[first + k].direction, aims[k]);
-            prefetch(aims[k].index);
-        }
-        for (std::size_t k = 0; k < size; ++k) {
-            const Ray& ray = rays[first + k];
-            judge(aims[k], ray.t_min, ray.t_max, results[first + k]);
-        }
-    }
-}
-
-void ProbeLookup::aim(const glm::dvec3& direction, Aim& aim) const {
+// Inline, like prefetch and judge: the batch's loops are the whole of an eye-at-probe view.
+inline void ProbeLookup::aim(const glm::dvec3& direction, Aim& aim) const {
     // A finite positive squared length is the common case of check_direction's test, in one
     // comparison; anything else goes to the full test and its error.
     const double length2 = glm::dot(direction, direction);
@@ -608,7 +584,7 @@ void ProbeLookup::aim(const glm::dvec3& direction, Aim& aim) const {
     aim.index = oct::texel_index(aim.texel, n_);
 }
 
-void ProbeLookup::prefetch(std::size_t index) const {
+inline void ProbeLookup::prefetch(std::size_t index) const {
     for (const Channel& c : channels_) {
         __builtin_prefetch(c.data + index * c.stride);
     }
@@ -618,8 +594,8 @@ void ProbeLookup::prefetch(std::size_t index) const {
 // where the ray's distance from the probe at parameter t is |t|, written out because it is the
 // whole cost of an eye-at-probe view. Written into `result` in place: a batch's results are
 // not copied through temporaries.
-void ProbeLookup::judge(const Aim& aim, double t_min, double t_max,
-                        ProbeTraceResult& result) const {
+inline void ProbeLookup::judge(const Aim& aim, double t_min, double t_max,
+                               ProbeTraceResult& result) const {
     result = ProbeTraceResult{};
     if (!(t_max > t_min)) {
         set_miss(result, t_max);
@@ -659,6 +635,31 @@ void ProbeLookup::judge(const Aim& aim, double t_min, double t_max,
         }
     }
     meet_texel(map_, aim.index, aim.texel, aim.d, t, t_min, result);
+}
+
+ProbeTraceResult ProbeLookup::lookup(const glm::dvec3& direction, double t_min,
+                                     double t_max) const {
+    ProbeTraceResult result;
+    Aim a;
+    aim(direction, a);
+    judge(a, t_min, t_max, result);
+    return result;
+}
+
+void ProbeLookup::lookup_batch(const Ray* rays, std::size_t count,
+                               ProbeTraceResult* results) const {
+    std::array<Aim, kBatch> aims;
+    for (std::size_t first = 0; first < count; first += kBatch) {
+        const std::size_t size = std::min(kBatch, count - first);
+        for (std::size_t k = 0; k < size; ++k) {
+            aim(rays[first + k].direction, aims[k]);
+            prefetch(aims[k].index);
+        }
+        for (std::size_t k = 0; k < size; ++k) {
+            const Ray& ray = rays[first + k];
+            judge(aims[k], ray.t_min, ray.t_max, results[first + k]);
+        }
+    }
 }
 
 ProbeTraceResult lookup_probe(const ProbeMap& map, const glm::dvec3& direction, double t_min,
