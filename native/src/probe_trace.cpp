@@ -31,6 +31,17 @@ constexpr double kEdgeMargin = 1e-4;
     return a > 0.0 ? 1 : (a < 0.0 ? -1 : 0);
 }
 
+// std::floor and std::round of a map coordinate g = (p + 1) N / 2, which lies in [0, N]: on
+// baseline x86-64 both are libm calls, in the walk's every skip. For g >= 0 truncation is the
+// floor, and g - floor(g) is exact (Sterbenz), so halves go up as std::round's do.
+[[nodiscard]] int floor_of_coordinate(double g) {
+    return static_cast<int>(g);
+}
+[[nodiscard]] double round_of_coordinate(double g) {
+    const double whole = static_cast<double>(static_cast<int>(g));
+    return g - whole >= 0.5 ? whole + 1.0 : whole;
+}
+
 // One map coordinate (u or v) inside one octant, as a function of the ray parameter:
 // p(t) = (num0 + t num1) / (den0 + t den1), the octahedral p = 2u − 1 of DESIGN.md §3 with the
 // octant's signs fixed, which makes numerator and denominator (the L1 norm) linear in t.
@@ -365,12 +376,12 @@ private:
             p = 0.0;
         }
         const double g = (0.5 * std::clamp(p, -1.0, 1.0) + 0.5) * static_cast<double>(n_);
-        int guess = std::clamp(static_cast<int>(std::floor(g)), 0, n_ - 1);
+        int guess = std::clamp(floor_of_coordinate(g), 0, n_ - 1);
         // Far from every edge the texel under p(t_exit) is the answer: the rounding of p and of
         // the crossing times is far below this margin, unless the L1 norm cancels (the ray
         // passing next to the probe centre). Near an edge the crossing times decide, as the
         // fine walk decides.
-        const double from_edge = std::abs(g - std::round(g));
+        const double from_edge = std::abs(g - round_of_coordinate(g));
         const bool no_cancellation = den * 1e6 > std::abs(m.den0) + std::abs(t_exit * m.den1);
         if (from_edge > kEdgeMargin && no_cancellation &&
             (c.step > 0 ? guess >= index : guess <= index) && g > 0.0 &&
@@ -408,8 +419,8 @@ private:
         }
         p = std::clamp(p, -1.0, 1.0);
         const double g = (0.5 * p + 0.5) * static_cast<double>(n_);
-        int index = std::clamp(static_cast<int>(std::floor(g)), 0, n_ - 1);
-        const double nearest_edge = std::round(g);
+        int index = std::clamp(floor_of_coordinate(g), 0, n_ - 1);
+        const double nearest_edge = round_of_coordinate(g);
         const int edge = static_cast<int>(nearest_edge);
         if (c.step != 0 && std::abs(g - nearest_edge) < 1e-3 && edge > 0 && edge < n_) {
             const double t_edge = plane_crossing(m, c, edge);
