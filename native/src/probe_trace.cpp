@@ -74,8 +74,9 @@ void set_unknown(ProbeTraceResult& result, oct::Texel texel, double t_enter) {
 
 // The ray meets the surface of texel `index` at t: a HIT when the surface faces the ray, else
 // UNKNOWN from t_enter (the back of a surface: what is in front of it is not known).
-void meet_texel(const ProbeMap& map, std::size_t index, oct::Texel texel, const glm::dvec3& d,
-                double t, double t_enter, ProbeTraceResult& result) {
+// Inline: it is the second half of every eye-at-probe lookup that hits.
+inline void meet_texel(const ProbeMap& map, std::size_t index, oct::Texel texel,
+                       const glm::dvec3& d, double t, double t_enter, ProbeTraceResult& result) {
     const glm::vec3 normal = map.normal_at(index);
     if (glm::dot(glm::dvec3(normal), d) > 0.0) {
         set_unknown(result, texel, t_enter);
