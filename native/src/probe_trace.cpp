@@ -5,6 +5,7 @@
 #include <cmath>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <glm/geometric.hpp>
 
@@ -28,6 +29,17 @@ constexpr double kEdgeMargin = 1e-4;
 
 [[nodiscard]] int sign_of(double a) {
     return a > 0.0 ? 1 : (a < 0.0 ? -1 : 0);
+}
+
+// std::floor and std::round of a map coordinate g = (p + 1) N / 2, which lies in [0, N]: on
+// baseline x86-64 both are libm calls, in the walk's every skip. For g >= 0 truncation is the
+// floor, and g - floor(g) is exact (Sterbenz), so halves go up as std::round's do.
+[[nodiscard]] int floor_of_coordinate(double g) {
+    return static_cast<int>(g);
+}
+[[nodiscard]] double round_of_coordinate(double g) {
+    const double whole = static_cast<double>(static_cast<int>(g));
+    return g - whole >= 0.5 ? whole + 1.0 : whole;
 }
 
 // One map coordinate (u or v) inside one octant, as a function of the ray parameter:
@@ -62,8 +74,9 @@ void set_unknown(ProbeTraceResult& result, oct::Texel texel, double t_enter) {
 
 // The ray meets the surface of texel `index` at t: a HIT when the surface faces the ray, else
 // UNKNOWN from t_enter (the back of a surface: what is in front of it is not known).
-void meet_texel(const ProbeMap& map, std::size_t index, oct::Texel texel, const glm::dvec3& d,
-                double t, double t_enter, ProbeTraceResult& result) {
+// Inline: it is the second half of every eye-at-probe lookup that hits.
+inline void meet_texel(const ProbeMap& map, std::size_t index, oct::Texel texel,
+                       const glm::dvec3& d, double t, double t_enter, ProbeTraceResult& result) {
     const glm::vec3 normal = map.normal_at(index);
     if (glm::dot(glm::dvec3(normal), d) > 0.0) {
         set_unknown(result, texel, t_enter);
@@ -364,12 +377,12 @@ private:
             p = 0.0;
         }
         const double g = (0.5 * std::clamp(p, -1.0, 1.0) + 0.5) * static_cast<double>(n_);
-        int guess = std::clamp(static_cast<int>(std::floor(g)), 0, n_ - 1);
+        int guess = std::clamp(floor_of_coordinate(g), 0, n_ - 1);
         // Far from every edge the texel under p(t_exit) is the answer: the rounding of p and of
         // the crossing times is far below this margin, unless the L1 norm cancels (the ray
         // passing next to the probe centre). Near an edge the crossing times decide, as the
         // fine walk decides.
-        const double from_edge = std::abs(g - std::round(g));
+        const double from_edge = std::abs(g - round_of_coordinate(g));
         const bool no_cancellation = den * 1e6 > std::abs(m.den0) + std::abs(t_exit * m.den1);
         if (from_edge > kEdgeMargin && no_cancellation &&
             (c.step > 0 ? guess >= index : guess <= index) && g > 0.0 &&
@@ -407,8 +420,8 @@ private:
         }
         p = std::clamp(p, -1.0, 1.0);
         const double g = (0.5 * p + 0.5) * static_cast<double>(n_);
-        int index = std::clamp(static_cast<int>(std::floor(g)), 0, n_ - 1);
-        const double nearest_edge = std::round(g);
+        int index = std::clamp(floor_of_coordinate(g), 0, n_ - 1);
+        const double nearest_edge = round_of_coordinate(g);
         const int edge = static_cast<int>(nearest_edge);
         if (c.step != 0 && std::abs(g - nearest_edge) < 1e-3 && edge > 0 && edge < n_) {
             const double t_edge = plane_crossing(m, c, edge);
@@ -502,15 +515,23 @@ private:
     ProbeTraceResult result_;
 };
 
-void check_inputs(const ProbeMap& map, const glm::dvec3& direction) {
+void check_map(const ProbeMap& map) {
     if (!map.is_complete()) {
         throw InputError("probe trace: the probe map is empty or inconsistent (resolution " +
                          std::to_string(map.resolution) + ")");
     }
+}
+
+void check_direction(const glm::dvec3& direction) {
     if (!std::isfinite(direction.x) || !std::isfinite(direction.y) || !std::isfinite(direction.z) ||
         glm::dot(direction, direction) == 0.0) {
         throw InputError("probe trace: the ray direction must be finite and non-zero");
     }
+}
+
+void check_inputs(const ProbeMap& map, const glm::dvec3& direction) {
+    check_map(map);
+    check_direction(direction);
 }
 
 } // namespace
@@ -534,42 +555,84 @@ double surface_thickness(const TraceSettings& settings, double distance, int n) 
 
 namespace {
 
-// The lookup for a unit direction `d` whose inputs are already checked: the walk's judgement
-// of one texel (Tracer::visit_texel) with the origin at the probe centre, where the ray's
-// distance from the probe at parameter t is |t|, written out because it is the whole cost of
-// an eye-at-probe view.
-ProbeTraceResult lookup_unit_direction(const ProbeMap& map, const glm::dvec3& d, double t_min,
-                                       double t_max, const TraceSettings& settings) {
-    ProbeTraceResult result;
-    const auto miss = [&] {
-        set_miss(result, t_max);
-        return result;
-    };
-    if (!(t_max > t_min)) {
-        return miss();
+// Where a channel's texel i starts, and how far apart texels are.
+template <class T>
+std::pair<const char*, std::size_t> channel_of(const std::vector<T>& values,
+                                               std::size_t per_texel) {
+    return {reinterpret_cast<const char*>(values.data()), per_texel * sizeof(T)};
+}
+
+} // namespace
+
+ProbeLookup::ProbeLookup(const ProbeMap& map, const TraceSettings& settings)
+    : map_(map), n_(map.resolution), eye_at_probe_distance_(settings.eye_at_probe_distance),
+      thickness_(settings.thickness),
+      // surface_thickness's own expression up to the distance, so that the sum is the same.
+      thickness_per_metre_(settings.thickness_texels * kTexelAngleTimesN /
+                           static_cast<double>(map.resolution)),
+      channels_{} {
+    check_map(map);
+    const PackedChannels& packed = map.packed;
+    const auto [distance, distance_stride] =
+        packed.distance.empty() ? channel_of(map.distance, 1) : channel_of(packed.distance, 1);
+    const auto [normal, normal_stride] =
+        packed.normal.empty() ? channel_of(map.normal, 3) : channel_of(packed.normal, 1);
+    const auto [radiance, radiance_stride] =
+        packed.srgb.empty() ? channel_of(map.rgba, 4) : channel_of(packed.srgb, 3);
+    channels_ = {Channel{distance, distance_stride}, Channel{normal, normal_stride},
+                 Channel{radiance, radiance_stride}};
+}
+
+// Inline, like prefetch and judge: the batch's loops are the whole of an eye-at-probe view.
+inline void ProbeLookup::aim(const glm::dvec3& direction, Aim& aim) const {
+    // A finite positive squared length is the common case of check_direction's test, in one
+    // comparison; anything else goes to the full test and its error.
+    const double length2 = glm::dot(direction, direction);
+    if (!(length2 > 0.0 && length2 < kInf)) {
+        check_direction(direction);
     }
-    const int n = map.resolution;
-    const oct::Texel texel = oct::texel_of_direction(glm::vec3(d), n);
-    const auto unknown = [&] {
-        set_unknown(result, texel, t_min);
-        return result;
-    };
+    aim.d = glm::normalize(direction);
+    aim.texel = oct::texel_of_direction(glm::vec3(aim.d), n_);
+    aim.index = oct::texel_index(aim.texel, n_);
+}
+
+inline void ProbeLookup::prefetch(std::size_t index) const {
+    for (const Channel& c : channels_) {
+        __builtin_prefetch(c.data + index * c.stride);
+    }
+}
+
+// The walk's judgement of one texel (Tracer::visit_texel) with the origin at the probe centre,
+// where the ray's distance from the probe at parameter t is |t|, written out because it is the
+// whole cost of an eye-at-probe view. Written into `result` in place: a batch's results are
+// not copied through temporaries.
+inline void ProbeLookup::judge(const Aim& aim, double t_min, double t_max,
+                               ProbeTraceResult& result) const {
+    result = ProbeTraceResult{};
+    if (!(t_max > t_min)) {
+        set_miss(result, t_max);
+        return;
+    }
     result.fine_steps = 1;
     const double far = std::isfinite(t_max) ? std::max(std::abs(t_min), std::abs(t_max)) : kInf;
-    if (far <= settings.eye_at_probe_distance) {
-        return miss(); // within the ball around the centre nothing can be
+    if (far <= eye_at_probe_distance_) {
+        set_miss(result, t_max); // within the ball around the centre nothing can be
+        return;
     }
-    const std::size_t i = oct::texel_index(texel, n);
-    const double r = static_cast<double>(map.distance_at(i));
+    const double r = static_cast<double>(map_.distance_at(aim.index));
     if (std::isnan(r)) {
-        return unknown();
+        set_unknown(result, aim.texel, t_min);
+        return;
     }
     if (std::isinf(r) || far < r) {
-        return miss(); // empty, or the surface lies beyond t_max
+        set_miss(result, t_max); // empty, or the surface lies beyond t_max
+        return;
     }
     const double near = std::abs(std::clamp(0.0, t_min, t_max));
-    if (near > r + surface_thickness(settings, r, n)) {
-        return unknown(); // the surface lies before t_min: what is behind it is not known
+    if (near > r + (thickness_ + thickness_per_metre_ * r)) {
+        // The surface lies before t_min: what is behind it is not known.
+        set_unknown(result, aim.texel, t_min);
+        return;
     }
     // Where the ray is at distance r; within the thickness only, the end nearest to it.
     double t = r;
@@ -583,16 +646,37 @@ ProbeTraceResult lookup_unit_direction(const ProbeMap& map, const glm::dvec3& d,
             }
         }
     }
-    meet_texel(map, i, texel, d, t, t_min, result);
+    meet_texel(map_, aim.index, aim.texel, aim.d, t, t_min, result);
+}
+
+ProbeTraceResult ProbeLookup::lookup(const glm::dvec3& direction, double t_min,
+                                     double t_max) const {
+    ProbeTraceResult result;
+    Aim a;
+    aim(direction, a);
+    judge(a, t_min, t_max, result);
     return result;
 }
 
-} // namespace
+void ProbeLookup::lookup_batch(const Ray* rays, std::size_t count,
+                               ProbeTraceResult* results) const {
+    std::array<Aim, kBatch> aims;
+    for (std::size_t first = 0; first < count; first += kBatch) {
+        const std::size_t size = std::min(kBatch, count - first);
+        for (std::size_t k = 0; k < size; ++k) {
+            aim(rays[first + k].direction, aims[k]);
+            prefetch(aims[k].index);
+        }
+        for (std::size_t k = 0; k < size; ++k) {
+            const Ray& ray = rays[first + k];
+            judge(aims[k], ray.t_min, ray.t_max, results[first + k]);
+        }
+    }
+}
 
 ProbeTraceResult lookup_probe(const ProbeMap& map, const glm::dvec3& direction, double t_min,
                               double t_max, const TraceSettings& settings) {
-    check_inputs(map, direction);
-    return lookup_unit_direction(map, glm::normalize(direction), t_min, t_max, settings);
+    return ProbeLookup(map, settings).lookup(direction, t_min, t_max);
 }
 
 ProbeTraceResult trace_probe(const ProbeMap& map, const MinDistancePyramid* levels, const Ray& ray,
@@ -601,7 +685,7 @@ ProbeTraceResult trace_probe(const ProbeMap& map, const MinDistancePyramid* leve
     const glm::dvec3 d = glm::normalize(ray.direction);
     const glm::dvec3& o = ray.origin;
     if (glm::length(o) <= settings.eye_at_probe_distance) {
-        return lookup_unit_direction(map, d, ray.t_min, ray.t_max, settings);
+        return ProbeLookup(map, settings).lookup(ray.direction, ray.t_min, ray.t_max);
     }
     Tracer tracer(map, levels, o, d, settings);
     const double t_lo = ray.t_min;

@@ -1,7 +1,9 @@
 #include "lfprobe/render.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
+#include <optional>
 #include <vector>
 
 #include <tbb/blocked_range2d.h>
@@ -49,33 +51,58 @@ int probe_at(const ProbeField& field, const glm::dvec3& eye, const TraceSettings
     return -1;
 }
 
-// The eye probe's O(1) lookup, falling back to the whole field where it answers UNKNOWN.
-// Every camera ray starts at the eye, so the lookup needs no walk set-up at all.
-FieldTraceResult trace_from_eye_probe(const ProbeField& field, int eye_probe, const Ray& ray,
-                                      const FieldTraceSettings& settings) {
-    const ProbeTraceResult r =
-        field.lookup_one(static_cast<std::size_t>(eye_probe), ray, settings.probe);
-    if (r.status == TraceStatus::Unknown) {
-        return field.trace(ray, settings);
+// Where a view's rays go first: the lookup of the probe the eye sits at, if it sits at one,
+// with the per-probe work done once per view.
+struct EyeProbe {
+    int index = -1;
+    std::optional<ProbeLookup> lookup;
+
+    EyeProbe(const ProbeField& field, const glm::dvec3& eye, const TraceSettings& settings)
+        : index(probe_at(field, eye, settings)) {
+        if (index >= 0) {
+            lookup.emplace(field.probe(static_cast<std::size_t>(index)), settings);
+        }
     }
-    FieldTraceResult result;
+};
+
+// Camera rays traced together, so that the eye probe's lookups fetch their texels together.
+constexpr std::size_t kRayBatch = 2 * ProbeLookup::kBatch;
+
+// The eye probe's answer as the field's, written field by field: a batch's results are not
+// copied through temporaries.
+void set_from_eye_probe(FieldTraceResult& result, const ProbeTraceResult& r, int probe) {
     result.status = r.status;
     result.t = r.t;
     result.free_until = r.free_until;
     result.radiance = r.radiance;
     result.normal = r.normal;
-    result.probe = eye_probe;
+    result.probe = probe;
     result.texel = r.texel;
     result.steps = r.steps();
     result.probes_tried = 1;
-    return result;
 }
 
-// One camera ray through the field: the eye probe's lookup when the eye sits at a probe.
-FieldTraceResult trace_camera_ray(const ProbeField& field, int eye_probe, const Ray& ray,
-                                  const FieldTraceSettings& settings) {
-    return eye_probe >= 0 ? trace_from_eye_probe(field, eye_probe, ray, settings)
-                          : field.trace(ray, settings);
+// Traces camera rays[0, count), count at most kRayBatch, into hits[0, count). From an eye at a
+// probe every ray is that probe's O(1) lookup, and only the rays it answers UNKNOWN go through
+// the whole field; every camera ray starts at the eye, so the lookup needs no walk set-up.
+void trace_camera_rays(const ProbeField& field, const EyeProbe& eye, const Ray* rays,
+                       std::size_t count, const FieldTraceSettings& settings,
+                       FieldTraceResult* hits) {
+    if (eye.index < 0) {
+        for (std::size_t k = 0; k < count; ++k) {
+            hits[k] = field.trace(rays[k], settings);
+        }
+        return;
+    }
+    std::array<ProbeTraceResult, kRayBatch> answers;
+    eye.lookup->lookup_batch(rays, count, answers.data());
+    for (std::size_t k = 0; k < count; ++k) {
+        if (answers[k].status == TraceStatus::Unknown) {
+            hits[k] = field.trace(rays[k], settings);
+        } else {
+            set_from_eye_probe(hits[k], answers[k], eye.index);
+        }
+    }
 }
 
 } // namespace
@@ -85,10 +112,20 @@ ThroughputResult probe_trace_throughput(const ProbeField& field, const Camera& c
     FieldTraceSettings trace = settings.trace;
     trace.mode = field.resolve_mode(settings.trace);
     const glm::dvec3 offset = field.world_offset();
-    const int eye_probe = probe_at(field, camera.position() - offset, trace.probe);
-    return measure_throughput(camera, offset, repeats, "probe trace", [&](const Ray& ray) {
-        return trace_camera_ray(field, eye_probe, ray, trace).status == TraceStatus::Hit;
-    });
+    const EyeProbe eye(field, camera.position() - offset, trace.probe);
+    return measure_batch_throughput(
+        camera, offset, repeats, "probe trace", [&](const Ray* rays, std::size_t count) {
+            std::array<FieldTraceResult, kRayBatch> hits;
+            std::uint64_t hit_count = 0;
+            for (std::size_t first = 0; first < count; first += kRayBatch) {
+                const std::size_t size = std::min(kRayBatch, count - first);
+                trace_camera_rays(field, eye, rays + first, size, trace, hits.data());
+                for (std::size_t k = 0; k < size; ++k) {
+                    hit_count += hits[k].status == TraceStatus::Hit ? 1 : 0;
+                }
+            }
+            return hit_count;
+        });
 }
 
 RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
@@ -111,7 +148,7 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
     const std::size_t tile = static_cast<std::size_t>(settings.tile_size);
     // An eye at a probe (DESIGN.md §4): every ray is one texel lookup in that probe; only rays
     // it cannot answer (UNKNOWN texels) go through the whole field.
-    const int eye_probe = probe_at(field, camera.position() - offset, trace.probe);
+    const EyeProbe eye(field, camera.position() - offset, trace.probe);
     const CameraRays camera_rays(camera);
     tbb::parallel_for(
         tbb::blocked_range2d<int>(0, camera.height, tile, 0, camera.width, tile),
@@ -119,27 +156,36 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
             if (progress != nullptr) {
                 progress->throw_if_cancelled();
             }
+            std::array<Ray, kRayBatch> rays;
+            std::array<FieldTraceResult, kRayBatch> hits;
             for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
-                for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
-                    const Ray ray = camera_rays.local_pixel_ray(x, y, offset, settings.sample_x,
-                                                                settings.sample_y);
-                    const FieldTraceResult hit = trace_camera_ray(field, eye_probe, ray, trace);
-                    const std::size_t i = image.index(x, y);
-                    const bool is_hit = hit.status == TraceStatus::Hit;
-                    if (is_hit) {
-                        image.rgba[4 * i] = hit.radiance.x;
-                        image.rgba[4 * i + 1] = hit.radiance.y;
-                        image.rgba[4 * i + 2] = hit.radiance.z;
-                        image.rgba[4 * i + 3] = 1.0f;
-                        image.depth[i] = static_cast<float>(hit.t);
-                        image.normal[3 * i] = hit.normal.x;
-                        image.normal[3 * i + 1] = hit.normal.y;
-                        image.normal[3 * i + 2] = hit.normal.z;
+                for (int x0 = r.cols().begin(); x0 < r.cols().end();) {
+                    const int count = std::min(static_cast<int>(kRayBatch), r.cols().end() - x0);
+                    const std::size_t size = static_cast<std::size_t>(count);
+                    for (int k = 0; k < count; ++k) {
+                        rays[static_cast<std::size_t>(k)] = camera_rays.local_pixel_ray(
+                            x0 + k, y, offset, settings.sample_x, settings.sample_y);
                     }
-                    image.status[i] = static_cast<std::uint8_t>(hit.status);
-                    image.probe[i] = hit.probe;
-                    image.steps[i] = hit.steps;
-                    probes_tried[i] = hit.probes_tried;
+                    trace_camera_rays(field, eye, rays.data(), size, trace, hits.data());
+                    for (int k = 0; k < count; ++k) {
+                        const FieldTraceResult& hit = hits[static_cast<std::size_t>(k)];
+                        const std::size_t i = image.index(x0 + k, y);
+                        if (hit.status == TraceStatus::Hit) {
+                            image.rgba[4 * i] = hit.radiance.x;
+                            image.rgba[4 * i + 1] = hit.radiance.y;
+                            image.rgba[4 * i + 2] = hit.radiance.z;
+                            image.rgba[4 * i + 3] = 1.0f;
+                            image.depth[i] = static_cast<float>(hit.t);
+                            image.normal[3 * i] = hit.normal.x;
+                            image.normal[3 * i + 1] = hit.normal.y;
+                            image.normal[3 * i + 2] = hit.normal.z;
+                        }
+                        image.status[i] = static_cast<std::uint8_t>(hit.status);
+                        image.probe[i] = hit.probe;
+                        image.steps[i] = hit.steps;
+                        probes_tried[i] = hit.probes_tried;
+                    }
+                    x0 += count;
                 }
             }
             if (progress != nullptr) {

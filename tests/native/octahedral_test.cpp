@@ -1,4 +1,5 @@
 // Hard cases of the octahedral mapping (DESIGN.md §3).
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -115,6 +116,22 @@ TEST(Octahedral, TexelIndicesCoverHalfOpenIntervalsAndClamp) {
     EXPECT_EQ(oct::texel_of_uv({0.125f, 0.25f}, n), (oct::Texel{1, 2})); // left edges belong
     EXPECT_EQ(oct::texel_of_uv({0.12499f, 0.24999f}, n), (oct::Texel{0, 1}));
     EXPECT_EQ(oct::texel_of_uv({-0.5f, 1.5f}, n), (oct::Texel{0, 7}));
+    // The index is floor(u N) clamped, for every float near the map and its edges: just below
+    // 0, at and next to each edge, just above 1.
+    for (const int size : {1, 7, 8, 1024}) {
+        const float fn = static_cast<float>(size);
+        for (int edge = -2; edge <= size + 2; ++edge) {
+            float u = static_cast<float>(edge) / fn;
+            for (int k = 0; k < 4; ++k) {
+                u = std::nextafter(u, -2.0f);
+            }
+            for (int k = 0; k < 9; ++k, u = std::nextafter(u, 2.0f)) {
+                const int expected = std::clamp(static_cast<int>(std::floor(u * fn)), 0, size - 1);
+                EXPECT_EQ(oct::texel_of_uv({u, u}, size), (oct::Texel{expected, expected}))
+                    << "u=" << u << " n=" << size;
+            }
+        }
+    }
 }
 
 TEST(Octahedral, EveryTexelCentreRoundTripsToItsTexel) {

@@ -3,14 +3,17 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <vector>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "lfprobe/error.hpp"
 #include "lfprobe/min_distance_pyramid.hpp"
 #include "lfprobe/octahedral.hpp"
+#include "lfprobe/probe_storage.hpp"
 #include "lfprobe/probe_trace.hpp"
 #include "trace_scenes.hpp"
 
@@ -449,4 +452,57 @@ TEST(Trace, StartsAtTMinAndStopsAtTMax) {
         trace_probe(map, &levels, probe_ray(eye, to_sphere, 0.0, hit.t - 0.1));
     EXPECT_EQ(short_ray.status, TraceStatus::Miss);
     EXPECT_EQ(short_ray.free_until, hit.t - 0.1);
+}
+
+TEST(Trace, BatchedLookupsAnswerAsSingleLookups) {
+    const int n = 64;
+    // Surfaces at several distances, some facing away, with empty and unknown texels between.
+    ProbeMap map = scenes::custom_probe(
+        n, glm::dvec3(0.0), [](const glm::vec3& d, std::size_t i, ProbeMap& m) {
+            if (d.y > 0.6f) {
+                m.set_unknown(i);
+            } else if (d.x > 0.6f) {
+                m.set_empty(i);
+            } else {
+                const float r = 1.0f + 2.0f * std::abs(d.z);
+                const glm::vec3 normal = d.x < -0.7f ? d : -d; // a back face where x < -0.7
+                m.set_surface(i, r, glm::vec3(0.25f, 0.5f, 0.75f) * r, normal, 1.0f);
+            }
+        });
+    ProbeMap packed = map;
+    (void)pack_probe(packed, ProbeStorage::compact(kDefaultDistanceStep));
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> uniform(0.0, 1.0);
+    for (const ProbeMap* m : {&map, &packed}) {
+        const TraceSettings settings;
+        const ProbeLookup lookup(*m, settings);
+        // Odd lengths, intervals that start before, at and beyond the surfaces, empty ones.
+        std::vector<Ray> rays(37 * ProbeLookup::kBatch / 8);
+        for (Ray& ray : rays) {
+            ray.direction = (0.5 + 2.0 * uniform(rng)) * scenes::random_unit(rng);
+            ray.t_min = uniform(rng) < 0.5 ? 0.0 : 4.0 * uniform(rng);
+            ray.t_max = uniform(rng) < 0.5 ? kInf : 4.0 * uniform(rng);
+        }
+        std::vector<ProbeTraceResult> batch(rays.size());
+        lookup.lookup_batch(rays.data(), rays.size(), batch.data());
+        std::size_t counts[3] = {0, 0, 0};
+        for (std::size_t i = 0; i < rays.size(); ++i) {
+            const ProbeTraceResult one =
+                lookup_probe(*m, rays[i].direction, rays[i].t_min, rays[i].t_max, settings);
+            ++counts[static_cast<int>(one.status)];
+            EXPECT_EQ(batch[i].status, one.status);
+            EXPECT_EQ(std::memcmp(&batch[i].t, &one.t, sizeof one.t), 0);
+            EXPECT_EQ(std::memcmp(&batch[i].free_until, &one.free_until, sizeof one.t), 0);
+            EXPECT_EQ(batch[i].texel, one.texel);
+            EXPECT_EQ(batch[i].radiance, one.radiance);
+            EXPECT_EQ(batch[i].normal, one.normal);
+            EXPECT_EQ(batch[i].steps(), one.steps());
+        }
+        // Every answer came up.
+        EXPECT_GT(counts[0], 0u);
+        EXPECT_GT(counts[1], 0u);
+        EXPECT_GT(counts[2], 0u);
+    }
+    EXPECT_THROW((void)lookup_probe(map, {0.0, 0.0, 0.0}, 0.0, kInf), InputError);
+    EXPECT_THROW(ProbeLookup(ProbeMap{}, TraceSettings{}), InputError);
 }

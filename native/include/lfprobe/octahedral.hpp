@@ -70,8 +70,10 @@ struct Texel {
 // [0, N-1] so that u or v = 1 lands on the last texel.
 [[nodiscard]] inline Texel texel_of_uv(const glm::vec2& uv, int n) {
     const float fn = static_cast<float>(n);
-    const int x = static_cast<int>(std::floor(uv.x * fn));
-    const int y = static_cast<int>(std::floor(uv.y * fn));
+    // Truncation, not floor: they differ only below 0, which the clamp sends to texel 0 either
+    // way, and floor is a call or a long sequence on baseline x86-64 (the lookup's hot path).
+    const int x = static_cast<int>(uv.x * fn);
+    const int y = static_cast<int>(uv.y * fn);
     return Texel{std::clamp(x, 0, n - 1), std::clamp(y, 0, n - 1)};
 }
 

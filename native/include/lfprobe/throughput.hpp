@@ -29,12 +29,14 @@ struct ThroughputResult {
     int repeats = 0;
 };
 
-// Times `is_hit(const Ray&) -> bool` over the camera's pixel-centre rays in the local frame of
-// `world_offset`. `who` names the tracer in errors.
-template <class IsHit>
-[[nodiscard]] ThroughputResult measure_throughput(const Camera& camera,
-                                                  const glm::dvec3& world_offset, int repeats,
-                                                  const std::string& who, IsHit&& is_hit) {
+// Times `count_hits(const Ray* rays, std::size_t count) -> hits among them` over the camera's
+// pixel-centre rays in the local frame of `world_offset`, handed out in runs of up to 1024
+// consecutive rays (a tracer may work on several rays at once). `who` names the tracer in
+// errors.
+template <class CountHits>
+[[nodiscard]] ThroughputResult
+measure_batch_throughput(const Camera& camera, const glm::dvec3& world_offset, int repeats,
+                         const std::string& who, CountHits&& count_hits) {
     if (repeats < 1) {
         throw InputError(who + " throughput: repeats must be at least 1");
     }
@@ -56,10 +58,8 @@ template <class IsHit>
         const auto start = std::chrono::steady_clock::now();
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, rays.size(), 1024),
                           [&](const tbb::blocked_range<std::size_t>& r) {
-                              std::uint64_t local = 0;
-                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
-                                  local += is_hit(rays[i]) ? 1 : 0;
-                              }
+                              const std::uint64_t local =
+                                  count_hits(rays.data() + r.begin(), r.size());
                               hits.fetch_add(local, std::memory_order_relaxed);
                           });
         const double seconds =
@@ -70,6 +70,21 @@ template <class IsHit>
     result.rays_per_second =
         result.seconds > 0.0 ? static_cast<double>(result.rays) / result.seconds : 0.0;
     return result;
+}
+
+// The same for a tracer of one ray at a time: `is_hit(const Ray&) -> bool`.
+template <class IsHit>
+[[nodiscard]] ThroughputResult measure_throughput(const Camera& camera,
+                                                  const glm::dvec3& world_offset, int repeats,
+                                                  const std::string& who, IsHit&& is_hit) {
+    return measure_batch_throughput(camera, world_offset, repeats, who,
+                                    [&](const Ray* rays, std::size_t count) {
+                                        std::uint64_t hits = 0;
+                                        for (std::size_t i = 0; i < count; ++i) {
+                                            hits += is_hit(rays[i]) ? 1 : 0;
+                                        }
+                                        return hits;
+                                    });
 }
 
 } // namespace lfprobe
