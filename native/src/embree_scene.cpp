@@ -1,5 +1,6 @@
 #include "lfprobe/embree_scene.hpp"
 
+#include <array>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -136,6 +137,74 @@ bool EmbreeScene::intersect_fast(const Ray& ray, float& t, std::uint32_t& triang
     t = rh.ray.tfar;
     triangle = impl_->triangle_of[rh.hit.geomID][rh.hit.primID];
     return true;
+}
+
+namespace {
+
+// rtcIntersect4/8/16 over rays[0, count) in packets of `Packet`'s width: the rays' fields set
+// lane by lane, unused lanes of the last packet masked off.
+template <class Packet, int Width, class Intersect>
+std::uint64_t count_packet_hits(RTCScene scene, const Ray* rays, std::size_t count,
+                                Intersect&& intersect) {
+    std::uint64_t hits = 0;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    alignas(64) Packet packet;
+    alignas(64) std::array<int, Width> valid;
+    for (std::size_t first = 0; first < count; first += Width) {
+        for (int k = 0; k < Width; ++k) {
+            const std::size_t i = first + static_cast<std::size_t>(k);
+            const std::size_t uk = static_cast<std::size_t>(k);
+            valid[uk] = i < count ? -1 : 0;
+            const RTCRayHit one = make_ray(rays[i < count ? i : first]);
+            packet.ray.org_x[k] = one.ray.org_x;
+            packet.ray.org_y[k] = one.ray.org_y;
+            packet.ray.org_z[k] = one.ray.org_z;
+            packet.ray.dir_x[k] = one.ray.dir_x;
+            packet.ray.dir_y[k] = one.ray.dir_y;
+            packet.ray.dir_z[k] = one.ray.dir_z;
+            packet.ray.tnear[k] = one.ray.tnear;
+            packet.ray.tfar[k] = one.ray.tfar;
+            packet.ray.mask[k] = one.ray.mask;
+            packet.ray.time[k] = 0.0f;
+            packet.ray.flags[k] = 0;
+            packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+            packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+        }
+        intersect(valid.data(), scene, &context, &packet);
+        for (int k = 0; k < Width; ++k) {
+            hits += valid[static_cast<std::size_t>(k)] != 0 &&
+                            packet.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID
+                        ? 1
+                        : 0;
+        }
+    }
+    return hits;
+}
+
+} // namespace
+
+std::uint64_t EmbreeScene::count_hits(const Ray* rays, std::size_t count, int packet) const {
+    switch (packet) {
+    case 1: {
+        std::uint64_t hits = 0;
+        float t = 0.0f;
+        std::uint32_t triangle = 0;
+        for (std::size_t i = 0; i < count; ++i) {
+            hits += intersect_fast(rays[i], t, triangle) ? 1 : 0;
+        }
+        return hits;
+    }
+    case 4:
+        return count_packet_hits<RTCRayHit4, 4>(impl_->scene, rays, count, rtcIntersect4);
+    case 8:
+        return count_packet_hits<RTCRayHit8, 8>(impl_->scene, rays, count, rtcIntersect8);
+    case 16:
+        return count_packet_hits<RTCRayHit16, 16>(impl_->scene, rays, count, rtcIntersect16);
+    default:
+        break;
+    }
+    throw InputError("Embree: a packet is 1, 4, 8 or 16 rays, got " + std::to_string(packet));
 }
 
 glm::vec3 EmbreeScene::facing(const glm::vec3& n, const glm::dvec3& direction) {

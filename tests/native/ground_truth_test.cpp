@@ -141,5 +141,22 @@ TEST(GroundTruth, ObjectChannelRoundTripsAndThroughput) {
     EXPECT_GT(t.rays_per_second, 0.0);
 }
 
+TEST(GroundTruth, EmbreePacketsCountTheHitsOfSingleRays) {
+    // From outside the closed room, with the room's edge in view: hits and misses, 33 × 7 rays
+    // (not a multiple of any packet width, so the last packet of a run has masked-off lanes).
+    const Mesh mesh = read_mesh(box_room_obj());
+    const EmbreeScene scene(mesh);
+    const Camera cam = Camera::look_at({0.0, -10.0, 1.2}, {2.0, 0.0, 1.2}, 33, 7);
+    const ThroughputResult single = embree_throughput(scene, cam, 1, 1);
+    EXPECT_GT(single.hits, 0u);
+    EXPECT_LT(single.hits, single.rays);
+    for (const int packet : {4, 8, 16}) {
+        const ThroughputResult packed = embree_throughput(scene, cam, 1, packet);
+        EXPECT_EQ(packed.rays, single.rays);
+        EXPECT_EQ(packed.hits, single.hits) << packet;
+    }
+    EXPECT_THROW((void)embree_throughput(scene, cam, 1, 3), InputError);
+}
+
 } // namespace
 } // namespace lfprobe

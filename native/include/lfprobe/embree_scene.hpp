@@ -49,6 +49,11 @@ public:
     // Only whether and where: t (Embree's float) and the triangle; for throughput figures.
     [[nodiscard]] bool intersect_fast(const Ray& ray, float& t, std::uint32_t& triangle) const;
 
+    // How many of rays[0, count) hit, traced in Embree's ray packets of `packet` rays (4, 8 or
+    // 16: rtcIntersect4/8/16, the API for coherent rays such as a camera's) or one at a time
+    // (1: rtcIntersect1). InputError for another packet size.
+    [[nodiscard]] std::uint64_t count_hits(const Ray* rays, std::size_t count, int packet) const;
+
     // Normal `n` turned to face a viewer looking along `direction`.
     [[nodiscard]] static glm::vec3 facing(const glm::vec3& n, const glm::dvec3& direction);
 
