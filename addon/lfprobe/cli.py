@@ -170,6 +170,18 @@ def _grids(grid_module, scene, name):
     return sorted((o for o in scene.objects if grid_module.is_grid(o)), key=lambda o: o.name)
 
 
+def _save_unless_told_not(args, note: str = "") -> None:
+    """Saves the open .blend after a batch step, unless --no-save."""
+    import bpy
+
+    if args.no_save:
+        return
+    if not bpy.data.filepath:
+        raise BatchError("the scene is not saved to a .blend: pass --no-save or open a saved .blend")
+    bpy.ops.wm.save_mainfile()
+    print(f"lfprobe: saved {bpy.data.filepath}{note}")
+
+
 def _store_storage_options(grid, args) -> None:
     """--storage and --distance-step onto the grid (saved with it), as the panel would set them."""
     if args.distance_step is not None:
@@ -202,11 +214,7 @@ def _cmd_bake(package, args) -> int:
             raise BatchError(f"baking grid '{grid_obj.name}' was cancelled", EXIT_CANCELLED)
         folder = grid_module.probe_dir_abspath(grid_obj)
         print(f"lfprobe: baked grid '{grid_obj.name}' into {folder}: loads {bake.memory_text(folder)}")
-    if not args.no_save:
-        if not bpy.data.filepath:
-            raise BatchError("the scene is not saved to a .blend: pass --no-save or open a saved .blend")
-        bpy.ops.wm.save_mainfile()
-        print(f"lfprobe: saved {bpy.data.filepath} (grids marked as baked)")
+    _save_unless_told_not(args, " (grids marked as baked)")
     return EXIT_OK
 
 
@@ -252,11 +260,7 @@ def _cmd_place(package, args) -> int:
         raise BatchError(f"adding probes to grid '{grid_obj.name}' was cancelled", EXIT_CANCELLED)
     print(f"lfprobe: grid '{grid_obj.name}': {place_views.summary_line(grid.placement())}")
     print(f"lfprobe: probe set in {grid_module.probe_dir_abspath(grid_obj)}")
-    if not args.no_save:
-        if not bpy.data.filepath:
-            raise BatchError("the scene is not saved to a .blend: pass --no-save or open a saved .blend")
-        bpy.ops.wm.save_mainfile()
-        print(f"lfprobe: saved {bpy.data.filepath}")
+    _save_unless_told_not(args)
     return EXIT_OK
 
 

@@ -57,24 +57,34 @@ float min_texel_angle(int n) {
     return smallest;
 }
 
+// A point as one probe sees it: offset v from the probe centre, its distance and direction,
+// its normal (oriented toward its scanner where that is known, else toward the probe) and the
+// reach of its splat's disc in its plane.
+struct Surfel {
+    glm::vec3 v;
+    float dist = 0.0f;
+    glm::vec3 dir;
+    glm::vec3 normal;
+    float reach = 0.0f;
+};
+
 // Depth along a texel's ray where it meets the point's surfel plane: exact for planar surfaces
 // and consistent between neighbouring texels. A plane too grazing to extrapolate from, or one
 // that puts the surface implausibly far from the point (beyond half to twice its distance, and
-// outside the splat's disc of `reach`), falls back to the point's own radial distance.
-float surfel_depth(const glm::vec3& normal, const glm::vec3& v, float dist,
-                   const glm::vec3& texel_dir, float reach) {
-    const float cos_plane = glm::dot(normal, texel_dir);
+// outside the splat's disc), falls back to the point's own radial distance.
+float surfel_depth(const Surfel& p, const glm::vec3& texel_dir) {
+    const float cos_plane = glm::dot(p.normal, texel_dir);
     if (std::abs(cos_plane) >= kMinPlaneCosine) {
-        const float s = glm::dot(normal, v) / cos_plane;
-        if (s > 0.5f * dist && s < 2.0f * dist) {
+        const float s = glm::dot(p.normal, p.v) / cos_plane;
+        if (s > 0.5f * p.dist && s < 2.0f * p.dist) {
             return s;
         }
-        const glm::vec3 off = s * texel_dir - v;
-        if (s > 0.0f && glm::dot(off, off) <= reach * reach) {
+        const glm::vec3 off = s * texel_dir - p.v;
+        if (s > 0.0f && glm::dot(off, off) <= p.reach * p.reach) {
             return s;
         }
     }
-    return dist;
+    return p.dist;
 }
 
 // True when the ray from the probe centre along unit `texel_dir` meets the disc of `radius`
@@ -148,35 +158,33 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     const int max_radius = std::max(1, std::min(settings.max_splat_radius_texels, n / 2));
     const std::size_t count = cloud.size();
 
-    // A point's normal as the probe sees it: oriented toward its scanner where that is known,
-    // else toward the probe.
-    auto normal_of = [&](std::size_t i, const glm::vec3& v) {
+    // Point i as this probe sees it; false for a point at the probe centre (no direction).
+    auto surfel_of = [&](std::size_t i, Surfel& p) {
+        p.v = glm::vec3(glm::dvec3(cloud.positions[i]) - centre);
+        p.dist = glm::length(p.v);
+        if (!(p.dist >= settings.min_distance)) {
+            return false;
+        }
+        p.dir = p.v / p.dist;
         const glm::vec3 normal = geometry.normals[i];
-        return !geometry.oriented[i] && glm::dot(normal, v) > 0.0f ? -normal : normal;
+        p.normal = !geometry.oriented[i] && glm::dot(normal, p.v) > 0.0f ? -normal : normal;
+        p.reach = settings.splat_plane_reach * settings.splat_scale * geometry.spacing[i];
+        return true;
     };
-    // How far from point i its splat's plane is used: the disc a neighbouring texel must meet.
-    auto plane_reach = [&](std::size_t i) {
-        return settings.splat_plane_reach * settings.splat_scale * geometry.spacing[i];
-    };
-    // Calls visit(texel, texel_dir, v, dist, dir) for every texel point i's splat covers: the
-    // texels in the cone of the splat radius seen face-on whose ray meets the point's surface
-    // plane within splat_plane_reach splat radii of the point (BakeSettings says why).
+    // Calls visit(texel, texel_dir, surfel) for every texel point i's splat covers: the texels
+    // in the cone of the splat radius seen face-on whose ray meets the point's surface plane
+    // within splat_plane_reach splat radii of the point (BakeSettings says why).
     auto for_each_splat_texel = [&](std::size_t i, auto&& visit) {
-        const glm::vec3 v = glm::vec3(glm::dvec3(cloud.positions[i]) - centre);
-        const float dist = glm::length(v);
-        if (!(dist >= settings.min_distance)) {
+        Surfel p;
+        if (!surfel_of(i, p)) {
             return;
         }
-        const glm::vec3 dir = v / dist;
-        const oct::Texel home = oct::texel_of_direction(dir, n);
-        const float radius = settings.splat_scale * geometry.spacing[i];
-        const float alpha = std::atan2(radius, dist);
+        const oct::Texel home = oct::texel_of_direction(p.dir, n);
+        const float alpha = std::atan2(settings.splat_scale * geometry.spacing[i], p.dist);
         const float cos_alpha = std::cos(alpha);
-        const glm::vec3& normal = geometry.normals[i];
-        const float normal_v = glm::dot(normal, v);
-        const float reach = plane_reach(i);
+        const float normal_v = glm::dot(p.normal, p.v);
         // A point with no surface (too few neighbours for a normal) keeps the whole cone.
-        const bool has_plane = glm::dot(normal, normal) > 0.0f;
+        const bool has_plane = glm::dot(p.normal, p.normal) > 0.0f;
         // A neighbour k texels away lies at least (k - 0.5) texel angles from `dir`.
         const int r = std::min(max_radius, static_cast<int>(std::ceil(alpha / texel_angle + 0.5f)));
         for (int dy = -r; dy <= r; ++dy) {
@@ -187,11 +195,11 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
                 // The point always claims its own texel; neighbours only inside its cone where
                 // their ray meets the point's surface plane near the point.
                 if ((dx != 0 || dy != 0) &&
-                    (glm::dot(texel_dir, dir) < cos_alpha ||
-                     (has_plane && !ray_meets_disc(texel_dir, v, normal, normal_v, reach)))) {
+                    (glm::dot(texel_dir, p.dir) < cos_alpha ||
+                     (has_plane && !ray_meets_disc(texel_dir, p.v, p.normal, normal_v, p.reach)))) {
                     continue;
                 }
-                visit(t, texel_dir, v, dist, dir);
+                visit(t, texel_dir, p);
             }
         }
     };
@@ -220,10 +228,8 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     // Pass 1: the nearest surface depth per texel.
     std::vector<std::uint32_t> front(texels, ordered_bits(kEmptyDistance));
     over_points("splatting points: depth", [&](std::size_t i) {
-        for_each_splat_texel(i, [&](std::size_t t, const glm::vec3& texel_dir, const glm::vec3& v,
-                                    float dist, const glm::vec3&) {
-            const float depth = surfel_depth(normal_of(i, v), v, dist, texel_dir, plane_reach(i));
-            keep_smaller(front[t], ordered_bits(depth));
+        for_each_splat_texel(i, [&](std::size_t t, const glm::vec3& texel_dir, const Surfel& p) {
+            keep_smaller(front[t], ordered_bits(surfel_depth(p, texel_dir)));
         });
     });
     // Pass 2: among the points on that front surface (within a surface thickness of about the
@@ -232,14 +238,13 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     std::vector<std::uint64_t> winner(texels, kNoPoint);
     over_points("splatting points: colour", [&](std::size_t i) {
         const float thickness = geometry.spacing[i];
-        for_each_splat_texel(i, [&](std::size_t t, const glm::vec3& texel_dir, const glm::vec3& v,
-                                    float dist, const glm::vec3& dir) {
-            const float depth = surfel_depth(normal_of(i, v), v, dist, texel_dir, plane_reach(i));
+        for_each_splat_texel(i, [&](std::size_t t, const glm::vec3& texel_dir, const Surfel& p) {
+            const float depth = surfel_depth(p, texel_dir);
             const float nearest = std::bit_cast<float>(front[t]);
             if (depth > nearest + std::max(thickness, 1e-3f * nearest)) {
                 return;
             }
-            const float off_centre = std::max(0.0f, 1.0f - glm::dot(texel_dir, dir));
+            const float off_centre = std::max(0.0f, 1.0f - glm::dot(texel_dir, p.dir));
             keep_smaller(winner[t], (static_cast<std::uint64_t>(ordered_bits(off_centre)) << 32) |
                                         static_cast<std::uint32_t>(i));
         });
@@ -265,10 +270,9 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
         } else if (!cloud.intensities.empty()) {
             rgb = glm::vec3((cloud.intensities[i] - intensity_min) * intensity_scale);
         }
-        const glm::vec3 v = glm::vec3(glm::dvec3(cloud.positions[i]) - centre);
-        const glm::vec3 normal = normal_of(i, v);
-        map.set_surface(t, surfel_depth(normal, v, glm::length(v), directions[t], plane_reach(i)),
-                        rgb, normal, 1.0f);
+        Surfel p;
+        (void)surfel_of(i, p); // a winner was splatted, so it has a direction
+        map.set_surface(t, surfel_depth(p, directions[t]), rgb, p.normal, 1.0f);
     });
     if (progress != nullptr) {
         progress->throw_if_cancelled();

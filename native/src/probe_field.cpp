@@ -286,11 +286,6 @@ ProbeTraceResult ProbeField::trace_one(std::size_t probe, const Ray& ray,
     return trace_probe(map, &levels_[probe], local, settings);
 }
 
-ProbeTraceResult ProbeField::lookup_one(std::size_t probe, const Ray& ray,
-                                        const TraceSettings& settings) const {
-    return lookup_probe(probes_.at(probe), ray.direction, ray.t_min, ray.t_max, settings);
-}
-
 FieldTraceResult ProbeField::trace(const Ray& ray, const FieldTraceSettings& settings) const {
     return resolve_mode(settings) == FieldMode::Grid ? trace_grid(ray, settings)
                                                      : trace_nearest(ray, settings);

@@ -18,6 +18,13 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 // The angular size of a texel of an N×N octahedral map is about sqrt(4π)/N (4π sr over N²).
 constexpr double kTexelAngleTimesN = 3.5449077018110318;
+
+// The texel term of surface_thickness per metre of distance, for a map of resolution n: one
+// expression for the walk, the lookup and surface_thickness, so that their sums agree bit for
+// bit.
+[[nodiscard]] double thickness_per_metre(const TraceSettings& settings, int n) {
+    return settings.thickness_texels * kTexelAngleTimesN / static_cast<double>(n);
+}
 constexpr int kMaxLevels = 32;
 // Texel units: how far from a texel edge a map coordinate must be for its texel to be taken
 // without comparing crossing times.
@@ -109,7 +116,7 @@ public:
         const glm::dvec3 closest = o_ - b_ * d_;
         perp2_ = glm::dot(closest, closest);
         origin_length_ = glm::length(o_);
-        texel_scale_ = settings.thickness_texels * kTexelAngleTimesN / static_cast<double>(n_);
+        texel_scale_ = thickness_per_metre(settings, n_);
         two_over_n_ = 2.0 / static_cast<double>(n_);
         if (levels != nullptr && settings.use_coarse_levels && texel_scale_ < 1.0) {
             levels_ = &levels->levels();
@@ -549,8 +556,7 @@ const char* trace_status_name(TraceStatus status) {
 }
 
 double surface_thickness(const TraceSettings& settings, double distance, int n) {
-    return settings.thickness +
-           settings.thickness_texels * kTexelAngleTimesN / static_cast<double>(n) * distance;
+    return settings.thickness + thickness_per_metre(settings, n) * distance;
 }
 
 namespace {
@@ -567,10 +573,7 @@ std::pair<const char*, std::size_t> channel_of(const std::vector<T>& values,
 ProbeLookup::ProbeLookup(const ProbeMap& map, const TraceSettings& settings)
     : map_(map), n_(map.resolution), eye_at_probe_distance_(settings.eye_at_probe_distance),
       thickness_(settings.thickness),
-      // surface_thickness's own expression up to the distance, so that the sum is the same.
-      thickness_per_metre_(settings.thickness_texels * kTexelAngleTimesN /
-                           static_cast<double>(map.resolution)),
-      channels_{} {
+      thickness_per_metre_(thickness_per_metre(settings, map.resolution)), channels_{} {
     check_map(map);
     const PackedChannels& packed = map.packed;
     const auto [distance, distance_stride] =

@@ -84,8 +84,9 @@ def _draw_storage(layout, obj) -> None:
         layout.operator("object.lfprobe_grid_apply_storage", icon="FILE_REFRESH").grid = obj.name
 
 
-class LFPROBE_PT_grid(bpy.types.Panel):
-    bl_label = "Light Field Probe Grid"
+class _GridPanel:
+    """Where a probe grid's panels live: the Object properties of a grid."""
+
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
     bl_context = "object"
@@ -93,6 +94,10 @@ class LFPROBE_PT_grid(bpy.types.Panel):
     @classmethod
     def poll(cls, context):
         return grid_module.is_grid(context.object)
+
+
+class LFPROBE_PT_grid(_GridPanel, bpy.types.Panel):
+    bl_label = "Light Field Probe Grid"
 
     def draw(self, context):
         obj = context.object
@@ -143,17 +148,10 @@ class LFPROBE_PT_grid(bpy.types.Panel):
             layout.label(text="Not baked")
 
 
-class LFPROBE_PT_grid_views(bpy.types.Panel):
+class LFPROBE_PT_grid_views(_GridPanel, bpy.types.Panel):
     bl_label = "Probes for Views"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "object"
     bl_parent_id = "LFPROBE_PT_grid"
     bl_options = {"DEFAULT_CLOSED"}
-
-    @classmethod
-    def poll(cls, context):
-        return grid_module.is_grid(context.object)
 
     def draw(self, context):
         obj = context.object

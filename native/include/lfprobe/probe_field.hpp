@@ -99,11 +99,6 @@ public:
     [[nodiscard]] FieldTraceResult trace_grid(const Ray& ray,
                                               const FieldTraceSettings& settings = {}) const;
 
-    // The eye-at-probe answer of one probe: one texel lookup in the ray's direction (the ray in
-    // the local frame, its origin at that probe's centre; lookup_probe's judgement).
-    [[nodiscard]] ProbeTraceResult lookup_one(std::size_t probe, const Ray& ray,
-                                              const TraceSettings& settings = {}) const;
-
     // One probe on its own (the ray in the local frame).
     [[nodiscard]] ProbeTraceResult trace_one(std::size_t probe, const Ray& ray,
                                              const TraceSettings& settings = {}) const;
