@@ -65,6 +65,35 @@ struct OctantMap {
     double den1 = 0.0;
 };
 
+// The ray's image in the map over one piece. Inside an octant the map is a central projection,
+// so the image is a straight segment: g(λ) = ga + λ (gb − ga) in texel units, λ in [0, 1] from
+// the piece's start to its end (λ is a linear-fractional function of t, increasing). Which
+// texel edge the walk meets first, and where the other coordinate is when it does, are then a
+// multiply-add each instead of a division per edge; the times the walk keeps are still the
+// exact plane crossings, and where two events are closer than the image's rounding (a texel
+// corner, an edge at the piece's end) the walk compares those crossing times instead.
+struct OctantImage {
+    bool usable = false;
+    double ga_u = 0.0;
+    double ga_v = 0.0;
+    double du = 0.0; // gb − ga
+    double dv = 0.0;
+    double inv_u = 0.0; // 1 / du; 0 for a coordinate that does not move
+    double inv_v = 0.0;
+    double error = 0.0; // bound on the rounding of ga and gb, texels
+};
+
+// What comes first along the image: an edge of u (axis 0) or v (axis 1), the piece's end, or
+// a tie that the crossing times must settle.
+constexpr int kPieceEnd = -1;
+constexpr int kTie = -2;
+struct Event {
+    int axis = kTie;
+    int edge = -1;
+    double lambda = 0.0;       // where along the image
+    double lambda_error = 0.0; // how far off that may be
+};
+
 void set_miss(ProbeTraceResult& result, double t_max) {
     result.status = TraceStatus::Miss;
     result.t = kInf;
@@ -118,6 +147,8 @@ public:
         origin_length_ = glm::length(o_);
         texel_scale_ = thickness_per_metre(settings, n_);
         two_over_n_ = 2.0 / static_cast<double>(n_);
+        o_l1_ = std::abs(o_.x) + std::abs(o_.y) + std::abs(o_.z);
+        d_l1_ = std::abs(d_.x) + std::abs(d_.y) + std::abs(d_.z);
         if (levels != nullptr && settings.use_coarse_levels && texel_scale_ < 1.0) {
             levels_ = &levels->levels();
             level_count_ = std::min(static_cast<int>(levels_->size()), kMaxLevels);
@@ -184,6 +215,7 @@ public:
         int x = start_index(m, m.u, ta);
         int y = start_index(m, m.v, ta);
         double t = ta;
+        const OctantImage image = image_of(m, ta, tb);
 
         std::array<int, kMaxLevels> memo_x;
         std::array<int, kMaxLevels> memo_y;
@@ -192,10 +224,13 @@ public:
 
         // Hierarchical walk in the manner of Hi-Z tracing: test the coarse cell around the
         // current texel; skip it whole when nothing in it can stop the ray and try the next
-        // coarser level, otherwise descend; after a fine texel, start again one level up.
+        // coarser level, otherwise descend; after a fine texel, start again at the finest level.
+        // A piece starts at the coarsest level: a cell the ray is already too far for is
+        // dismissed by one read and one comparison, before its exit is sought.
         // Cells found not skippable are remembered so that they are not tested again.
         const int top = level_count_ - 1;
-        int level = top >= 0 ? 0 : -1;
+        int level = top;
+        double here2 = distance2(t); // the ray's squared distance from the probe at t
         const long max_iterations = 16L * n_ + 64L * (level_count_ + 1);
         for (long iteration = 0; iteration < max_iterations; ++iteration) {
             if (level >= 0) {
@@ -212,26 +247,13 @@ public:
                 const double cell_min = static_cast<double>(lv.value(
                     static_cast<std::size_t>(cy) * static_cast<std::size_t>(lv.resolution) +
                     static_cast<std::size_t>(cx)));
-                const double exit_x = cell_exit(m, m.u, cx, shift);
-                const double exit_y = cell_exit(m, m.v, cy, shift);
-                const double t_exit = std::max(std::min({exit_x, exit_y, tb}), t);
-                if (skippable(cell_min, t, t_exit)) {
-                    // Along the axis whose cell edge ends the skip, the landing texel is next
-                    // to that edge: the search starts there.
-                    const int nx = advance(m, m.u, x, t_exit,
-                                           exit_x == t_exit ? exit_texel(m.u, cx, shift) : -1);
-                    const int ny = advance(m, m.v, y, t_exit,
-                                           exit_y == t_exit ? exit_texel(m.v, cy, shift) : -1);
-                    if (t_exit > t || nx != x || ny != y) {
-                        if (t_exit > t) {
-                            near_miss_.valid = false; // every texel passed was clearly in front
-                        }
-                        if (t_exit >= tb) {
-                            return false;
-                        }
-                        x = nx;
-                        y = ny;
-                        t = t_exit;
+                if (may_skip_from(cell_min, here2)) {
+                    const Move move = skip_cell(m, image, cell_min, cx, cy, shift, x, y, t, tb);
+                    if (move == Move::PieceDone) {
+                        return false;
+                    }
+                    if (move == Move::Moved) {
+                        here2 = distance2(t);
                         level = std::min(level + 1, top);
                         continue;
                     }
@@ -241,26 +263,248 @@ public:
                 --level;
                 continue;
             }
-            const double tnx = next_crossing(m, m.u, x);
-            const double tny = next_crossing(m, m.v, y);
-            const double t_next = std::max(std::min({tnx, tny, tb}), t);
+            // The texel's exit: the first of its two forward edges and the piece's end.
+            const Event next = first_event(image, next_edge(m.u, x), next_edge(m.v, y));
+            double t_next = kInf;
+            bool step_x = false;
+            bool step_y = false;
+            bool decided = false;
+            if (next.axis >= 0) {
+                const double t_edge = crossing(m, next.axis == 0 ? m.u : m.v, next.edge);
+                if (t_edge <= tb) {
+                    t_next = std::max(t_edge, t);
+                    step_x = next.axis == 0;
+                    step_y = next.axis == 1;
+                    decided = true;
+                }
+            } else if (next.axis == kPieceEnd) {
+                t_next = std::max(tb, t);
+                decided = true;
+            }
+            if (!decided) {
+                const double tnx = next_crossing(m, m.u, x);
+                const double tny = next_crossing(m, m.v, y);
+                t_next = std::max(std::min({tnx, tny, tb}), t);
+                step_x = tnx <= t_next;
+                step_y = tny <= t_next;
+            }
             if (visit_texel(x, y, t, t_next)) {
                 return true;
             }
             if (t_next >= tb) {
                 return false;
             }
-            if (tnx <= t_next) {
+            if (step_x) {
                 x += m.u.step;
             }
-            if (tny <= t_next) {
+            if (step_y) {
                 y += m.v.step;
             }
             t = t_next;
+            here2 = distance2(t);
             level = top >= 0 ? 0 : -1;
         }
         // Unreachable for a monotone walk; a guard against looping on corrupt input.
         return stop_unknown({x, y}, t);
+    }
+
+    // What a coarse step did: moved past the cell, ended the piece inside it, or neither.
+    enum class Move { Moved, PieceDone, Stay };
+
+    // Skips coarse cell (cx, cy) of `shift` (2^shift texels a side) when nothing in it can stop
+    // the ray, moving (x, y, t) to where the fine walk would be when it leaves the cell.
+    Move skip_cell(const OctantMap& m, const OctantImage& image, double cell_min, int cx, int cy,
+                   int shift, int& x, int& y, double& t, double tb) {
+        const Event exit = first_event(image, exit_edge(m.u, cx, shift), exit_edge(m.v, cy, shift));
+        if (exit.axis == kPieceEnd) {
+            const double t_end = std::max(tb, t);
+            if (!skippable(cell_min, t, t_end)) {
+                return Move::Stay;
+            }
+            if (t_end > t) {
+                near_miss_.valid = false; // every texel passed was clearly in front
+            }
+            return Move::PieceDone;
+        }
+        if (exit.axis >= 0) {
+            const bool along_u = exit.axis == 0;
+            const OctantCoordinate& c = along_u ? m.u : m.v;
+            const double t_edge = crossing(m, c, exit.edge);
+            if (t_edge <= tb) {
+                const double t_exit = std::max(t_edge, t);
+                if (!skippable(cell_min, t, t_exit)) {
+                    return Move::Stay;
+                }
+                // The exit axis enters the texel past the cell's edge; the other is wherever
+                // the image is there, settled by crossing times when that is next to an edge.
+                const int entered = exit_texel(c, along_u ? cx : cy, shift);
+                if (along_u) {
+                    y = land(m, m.v, y, t_exit, image.ga_v + exit.lambda * image.dv,
+                             exit.lambda_error * std::abs(image.dv) + image.error);
+                    x = entered;
+                } else {
+                    x = land(m, m.u, x, t_exit, image.ga_u + exit.lambda * image.du,
+                             exit.lambda_error * std::abs(image.du) + image.error);
+                    y = entered;
+                }
+                if (t_exit > t) {
+                    near_miss_.valid = false; // every texel passed was clearly in front
+                }
+                t = t_exit;
+                return Move::Moved;
+            }
+        }
+        // A tie, or an image too ill-conditioned to decide: every crossing time compared.
+        const double exit_x = cell_exit(m, m.u, cx, shift);
+        const double exit_y = cell_exit(m, m.v, cy, shift);
+        const double t_exit = std::max(std::min({exit_x, exit_y, tb}), t);
+        if (!skippable(cell_min, t, t_exit)) {
+            return Move::Stay;
+        }
+        // Along the axis whose cell edge ends the skip, the landing texel is next to that
+        // edge: the search starts there.
+        const int nx =
+            advance(m, m.u, x, t_exit, exit_x == t_exit ? exit_texel(m.u, cx, shift) : -1);
+        const int ny =
+            advance(m, m.v, y, t_exit, exit_y == t_exit ? exit_texel(m.v, cy, shift) : -1);
+        if (!(t_exit > t || nx != x || ny != y)) {
+            return Move::Stay;
+        }
+        if (t_exit > t) {
+            near_miss_.valid = false; // every texel passed was clearly in front
+        }
+        if (t_exit >= tb) {
+            return Move::PieceDone;
+        }
+        x = nx;
+        y = ny;
+        t = t_exit;
+        return Move::Moved;
+    }
+
+    // The image's endpoints at ta and tb; not usable where the L1 norm cancels (the ray passing
+    // next to the probe centre) or a coordinate moves against its step.
+    [[nodiscard]] OctantImage image_of(const OctantMap& m, double ta, double tb) const {
+        OctantImage image;
+        if (!settings_.order_by_image) {
+            return image;
+        }
+        double gb_u = 0.0;
+        double gb_v = 0.0;
+        double kappa_a = 0.0;
+        double kappa_b = 0.0;
+        if (!image_point(m, ta, image.ga_u, image.ga_v, kappa_a) ||
+            !image_point(m, tb, gb_u, gb_v, kappa_b)) {
+            return image;
+        }
+        image.du = gb_u - image.ga_u;
+        image.dv = gb_v - image.ga_v;
+        // A quotient of sums of two products: a few ulps of the larger terms, which are
+        // kappa times the L1 norm; in texels, times N.
+        image.error = 8.0 * std::numeric_limits<double>::epsilon() * std::max(kappa_a, kappa_b) *
+                      static_cast<double>(n_);
+        image.usable = moves_with_step(m.u, image.du, image.inv_u) &&
+                       moves_with_step(m.v, image.dv, image.inv_v);
+        return image;
+    }
+
+    // Texel coordinates of the image at t (t = +inf: the direction's own texel), and how
+    // ill-conditioned they are (the terms' magnitude over the L1 norm); false past 1e6.
+    [[nodiscard]] bool image_point(const OctantMap& m, double t, double& gu, double& gv,
+                                   double& kappa) const {
+        double den;
+        double nu;
+        double nv;
+        double magnitude;
+        if (std::isinf(t)) {
+            if (t < 0.0) {
+                return false;
+            }
+            den = m.den1;
+            nu = m.u.num1;
+            nv = m.v.num1;
+            magnitude = d_l1_;
+        } else {
+            den = m.den0 + t * m.den1;
+            nu = m.u.num0 + t * m.u.num1;
+            nv = m.v.num0 + t * m.v.num1;
+            magnitude = o_l1_ + std::abs(t) * d_l1_;
+        }
+        if (!(den > 0.0) || !(den * 1e6 > magnitude)) {
+            return false;
+        }
+        kappa = magnitude / den;
+        const double half_n = 0.5 * static_cast<double>(n_);
+        const double scale = half_n / den;
+        gu = nu * scale + half_n;
+        gv = nv * scale + half_n;
+        return true;
+    }
+
+    // 1 / delta for a coordinate that moves the way the walk steps it (0 when it does not
+    // step); false when the image disagrees with the step.
+    [[nodiscard]] static bool moves_with_step(const OctantCoordinate& c, double delta,
+                                              double& inverse) {
+        inverse = 0.0;
+        if (c.step == 0) {
+            return true;
+        }
+        if (c.step > 0 ? !(delta > 0.0) : !(delta < 0.0)) {
+            return false;
+        }
+        inverse = 1.0 / delta;
+        return std::isfinite(inverse);
+    }
+
+    // The edge the walk crosses leaving texel `index` along `c`; −1 at the map's border or
+    // when the coordinate does not move.
+    [[nodiscard]] int next_edge(const OctantCoordinate& c, int index) const {
+        if (c.step > 0) {
+            return index + 1 < n_ ? index + 1 : -1;
+        }
+        if (c.step < 0) {
+            return index > 0 ? index : -1;
+        }
+        return -1;
+    }
+
+    // The first of edge `eu` of u, edge `ev` of v (−1: none) and the piece's end along the
+    // image; kTie when they are closer than the image's rounding or the image is not usable.
+    [[nodiscard]] static Event first_event(const OctantImage& image, int eu, int ev) {
+        Event event;
+        if (!image.usable) {
+            return event;
+        }
+        const double lu = eu >= 0 ? (static_cast<double>(eu) - image.ga_u) * image.inv_u : kInf;
+        const double lv = ev >= 0 ? (static_cast<double>(ev) - image.ga_v) * image.inv_v : kInf;
+        // An edge's λ is off by the endpoints' error over the coordinate's extent, twice.
+        const double eu_error = 4.0 * image.error * std::abs(image.inv_u);
+        const double ev_error = 4.0 * image.error * std::abs(image.inv_v);
+        if (lu + eu_error < lv - ev_error && lu + eu_error < 1.0) {
+            event = Event{0, eu, lu, eu_error};
+        } else if (lv + ev_error < lu - eu_error && lv + ev_error < 1.0) {
+            event = Event{1, ev, lv, ev_error};
+        } else if (1.0 < lu - eu_error && 1.0 < lv - ev_error) {
+            event.axis = kPieceEnd;
+        }
+        return event;
+    }
+
+    // The index of coordinate `c` at t_exit, given its image coordinate g there (off by at
+    // most g_error): the texel under g when that is clear of every edge, else the crossing
+    // times decide (advance).
+    [[nodiscard]] int land(const OctantMap& m, const OctantCoordinate& c, int index, double t_exit,
+                           double g, double g_error) const {
+        if (c.step == 0) {
+            return index;
+        }
+        const int guess = floor_of_coordinate(std::max(g, 0.0));
+        const double from_edge = std::abs(g - round_of_coordinate(std::max(g, 0.0)));
+        if (from_edge > g_error && g > 0.0 && g < static_cast<double>(n_) &&
+            (c.step > 0 ? guess >= index : guess <= index)) {
+            return guess;
+        }
+        return advance(m, c, index, t_exit);
     }
 
     // Passing through the ball around the probe centre, the ray forgets a surface it passed
@@ -443,6 +687,24 @@ private:
         return index;
     }
 
+    // False when the ray, at squared distance `here2` from the probe where a skip would start,
+    // is already too far for a cell of minimum distance `cell_min` to be skippable (skippable
+    // would say no for any end of the skip); one comparison, before the cell's exit is sought.
+    [[nodiscard]] bool may_skip_from(double cell_min, double here2) const {
+        if (std::isinf(cell_min)) {
+            return true;
+        }
+        const double clear = clear_distance(cell_min);
+        return clear > 0.0 && here2 < clear * clear;
+    }
+
+    // How far from the probe the ray may be and still pass clearly in front of every texel of
+    // a cell of minimum distance `cell_min`: r − thickness(r) grows with r (texel_scale_ < 1),
+    // less a margin that covers the rounding of the squared distances compared with it.
+    [[nodiscard]] double clear_distance(double cell_min) const {
+        return cell_min - thickness(cell_min) - 1e-9 * (1.0 + cell_min);
+    }
+
     // True when no fine texel under a coarse cell of minimum distance `cell_min` can stop the
     // ray over [t0, t1]: each is empty or clearly behind the ray (r − thickness(r) > the ray's
     // largest distance; r − thickness(r) grows with r since texel_scale_ < 1).
@@ -450,8 +712,7 @@ private:
         if (std::isinf(cell_min)) {
             return true;
         }
-        const double margin = 1e-9 * (1.0 + cell_min);
-        const double clear = cell_min - thickness(cell_min) - margin;
+        const double clear = clear_distance(cell_min);
         if (!(clear > 0.0) || !std::isfinite(t1)) {
             return false;
         }
@@ -517,6 +778,8 @@ private:
     double origin_length_ = 0.0;
     double texel_scale_ = 0.0;
     double two_over_n_ = 0.0;
+    double o_l1_ = 0.0; // |o|_1 and |d|_1: the size of the terms of the map's coordinates
+    double d_l1_ = 0.0;
     double piece_start_ = 0.0;
     NearMiss near_miss_;
     ProbeTraceResult result_;

@@ -67,6 +67,80 @@ TEST(Trace, CoarseSkipNeverChangesTheAnswer) {
     }
 }
 
+// The walk orders texel edges along the ray's straight image in the map and solves only the
+// edge crossed; comparing every crossing time instead must give the same answers bit for bit,
+// on random rays and on the rays where the image's rounding matters: along texel edges,
+// through texel corners, from next to the probe centre, with zero components, and ending on
+// an edge.
+TEST(Trace, OrderingEdgesAlongTheImageNeverChangesTheAnswer) {
+    const BoxRoomScene scene;
+    const int n = 128;
+    const glm::dvec3 centre(-0.4, 0.3, 1.4);
+    const ProbeMap map = scenes::analytic_probe_with_holes(scene, centre, n);
+    const MinDistancePyramid levels(map.distance, n);
+    std::vector<Ray> rays;
+    std::mt19937 rng(7);
+    for (int i = 0; i < 4000; ++i) {
+        const glm::dvec3 o = scenes::random_point_in_room(scene, rng, 0.05) - centre;
+        const double t_max =
+            i % 3 == 0 ? std::uniform_real_distribution<double>(0.5, 4.0)(rng) : kInf;
+        rays.push_back(probe_ray(o, scenes::random_unit(rng), 0.0, t_max));
+    }
+    auto uv_of = [n](double k) { return static_cast<float>(k / n); };
+    for (int k = 1; k < n; k += 5) {
+        for (int m = 2; m < n; m += 7) {
+            // Along the edge u = k/N, and through the corner (k/N, m/N).
+            const glm::dvec3 e1(oct::decode({uv_of(k), uv_of(m + 0.3)}));
+            const glm::dvec3 e2(oct::decode({uv_of(k), uv_of(m + 2.6)}));
+            rays.push_back(probe_ray(0.3 * e1, 2.0 * e2 - 0.3 * e1));
+            const glm::dvec3 corner(oct::decode({uv_of(k), uv_of(m)}));
+            const glm::dvec3 from(oct::decode({uv_of(k + 0.37), uv_of(m + 0.61)}));
+            rays.push_back(probe_ray(0.25 * from, 1.7 * corner - 0.25 * from));
+            // Ending exactly where the ray crosses the corner's direction.
+            const Ray to_corner = probe_ray(0.25 * from, corner - 0.25 * from);
+            rays.push_back(probe_ray(to_corner.origin, to_corner.direction, 0.0,
+                                     glm::length(corner - 0.25 * from)));
+        }
+    }
+    for (const double near : {1e-7, 1e-5, 1e-3}) {
+        for (int i = 0; i < 200; ++i) {
+            const glm::dvec3 d = scenes::random_unit(rng);
+            rays.push_back(probe_ray(near * scenes::random_unit(rng), d));
+            // Passing the centre at `near`.
+            const glm::dvec3 side = glm::normalize(glm::cross(d, scenes::random_unit(rng)));
+            rays.push_back(probe_ray(near * side - 0.5 * d, d));
+        }
+    }
+    for (const glm::dvec3& d : {glm::dvec3(1, 0, 0), glm::dvec3(0, -1, 0), glm::dvec3(0, 0, -1),
+                                glm::dvec3(1, 1, 0), glm::dvec3(0, 1, -1), glm::dvec3(-1, 0, 1)}) {
+        for (const glm::dvec3& o : {glm::dvec3(0.2, 0.3, 0.4), glm::dvec3(0.0, 0.3, 0.0),
+                                    glm::dvec3(-0.2, 0.0, 0.1), glm::dvec3(0.0, 0.0, -0.3)}) {
+            rays.push_back(probe_ray(o, d));
+        }
+    }
+    TraceSettings by_times;
+    by_times.order_by_image = false;
+    TraceSettings fine_only;
+    fine_only.use_coarse_levels = false;
+    std::size_t counts[3] = {0, 0, 0};
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        const ProbeTraceResult a = trace_probe(map, &levels, rays[i]);
+        const ProbeTraceResult b = trace_probe(map, &levels, rays[i], by_times);
+        const ProbeTraceResult c = trace_probe(map, &levels, rays[i], fine_only);
+        for (const ProbeTraceResult* other : {&b, &c}) {
+            ASSERT_EQ(a.status, other->status) << "ray " << i;
+            ASSERT_EQ(a.texel, other->texel) << "ray " << i;
+            ASSERT_EQ(a.t, other->t) << "ray " << i;
+            ASSERT_EQ(a.free_until, other->free_until) << "ray " << i;
+        }
+        ++counts[static_cast<int>(a.status)];
+    }
+    std::printf("%zu rays (%zu miss, %zu hit, %zu unknown): the same answers with edges ordered "
+                "along the image, by crossing times, and without coarse levels\n",
+                rays.size(), counts[0], counts[1], counts[2]);
+    EXPECT_GT(counts[static_cast<int>(TraceStatus::Hit)], rays.size() / 2);
+}
+
 namespace {
 
 struct MarchAnswer {

@@ -8,7 +8,9 @@
 // over each texel's t-interval the ray's distance from the probe is known exactly (largest at
 // an end, smallest at an end or at the closest approach t* = −o·d), and is compared with the
 // radial distance the probe stored for that texel. Coarse min-distance levels skip whole
-// blocks of texels the ray passes in front of; the skip never changes the answer.
+// blocks of texels the ray passes in front of; the skip never changes the answer. Which edge
+// comes next is read off the ray's straight image in the map (a multiply-add per edge), and
+// only the edge crossed is solved for its time (a division).
 #pragma once
 
 #include <array>
@@ -44,6 +46,10 @@ struct TraceSettings {
     // Skip texels with the coarse min-distance levels (false: walk every fine texel; the
     // answer is the same, only slower; for tests and measurements).
     bool use_coarse_levels = true;
+    // Order the walk's texel edges along the ray's straight image in the map, with the exact
+    // crossing times settling ties (false: compare the crossing times of every edge; the answer
+    // is the same, only slower; for tests and measurements).
+    bool order_by_image = true;
     // A ray origin closer than this (metres) to the probe centre is at the probe: its answer is
     // one texel lookup.
     double eye_at_probe_distance = 1e-9;
