@@ -49,6 +49,62 @@ def _bake(_native, n, res, folder):
     return cloud, time.perf_counter() - start
 
 
+def _unknown_texels(folder: str) -> float:
+    """Mean fraction of unknown texels over the probes of a baked set (from its manifest)."""
+    with open(os.path.join(folder, "manifest.json"), encoding="utf-8") as f:
+        probes = json.load(f)["probes"]
+    return sum(p["coverage"]["unknown"] for p in probes) / len(probes)
+
+
+def _trace_row(_native, field, mesh, name: str, text: str) -> dict:
+    """One view traced through the probes on 1 and 2 threads, and Embree on the same rays."""
+    one = _best_render(field, text, 1)
+    two = _best_render(field, text, 2)
+    row = {
+        "view": name,
+        "rays": one["rays"],
+        "rays_per_second_1_thread": one["rays_per_second"],
+        "rays_per_second_2_threads": two["rays_per_second"],
+        "ms_per_frame_2_threads": 1000 * two["seconds"],
+        "texels_per_ray": two["mean_steps"],
+        "probes_per_ray": two["mean_probes"],
+        "hit_rate": two["hits"] / two["rays"],
+        "unknown_rate": two["unknown"] / two["rays"],
+    }
+    embree = _native.embree_throughput(mesh, text, threads=2, repeats=3)
+    # Embree's packet API, the fairer match for the probe trace's runs of camera rays: the
+    # fastest of 4, 8 and 16 rays a call.
+    packets = {p: _native.embree_throughput(mesh, text, threads=2, repeats=3,
+                                            packet=p)["rays_per_second"]
+               for p in (4, 8, 16)}
+    best_packet = max(packets, key=packets.get)
+    # Measured as Embree's figure is: rays made beforehand, trace only.
+    trace_only = field.trace_throughput(text, threads=2, repeats=3)
+    row["embree_rays_per_second_2_threads"] = embree["rays_per_second"]
+    row["embree_packet_rays_per_second_2_threads"] = packets[best_packet]
+    row["embree_best_packet"] = best_packet
+    row["trace_only_rays_per_second_2_threads"] = trace_only["rays_per_second"]
+    row["trace_over_embree"] = trace_only["rays_per_second"] / embree["rays_per_second"]
+    row["trace_over_embree_packets"] = trace_only["rays_per_second"] / packets[best_packet]
+    row["frame_over_embree"] = two["rays_per_second"] / embree["rays_per_second"]
+    print(
+        f"  {name}: {row['rays']:,} rays; {row['rays_per_second_1_thread'] / 1e6:.2f} M "
+        f"rays/s on 1 thread, {row['rays_per_second_2_threads'] / 1e6:.2f} M on 2 "
+        f"({row['ms_per_frame_2_threads']:.1f} ms/frame); {row['texels_per_ray']:.1f} "
+        f"texels and {row['probes_per_ray']:.2f} probes per ray; HIT "
+        f"{100 * row['hit_rate']:.1f}%, UNKNOWN {100 * row['unknown_rate']:.1f}%\n"
+        f"    trace only (rays made beforehand, as Embree is measured): "
+        f"{row['trace_only_rays_per_second_2_threads'] / 1e6:.2f} M rays/s; Embree "
+        f"{row['embree_rays_per_second_2_threads'] / 1e6:.2f} M rays/s on 2 threads: "
+        f"probe trace / Embree = {row['trace_over_embree']:.3f} (whole frame incl. "
+        f"ray generation and pixel writes / Embree = {row['frame_over_embree']:.3f})\n"
+        f"    Embree in packets of {best_packet} (rtcIntersect{best_packet}, its fastest "
+        f"of 4, 8, 16): {packets[best_packet] / 1e6:.2f} M rays/s: probe trace / "
+        f"Embree packets = {row['trace_over_embree_packets']:.3f}"
+    )
+    return row
+
+
 def main(args) -> int:
     _native = native.load()
     tmp = tempfile.mkdtemp(prefix="lfprobe-bench-render-")
@@ -56,66 +112,26 @@ def main(args) -> int:
     try:
         sizes = sorted(int(float(s)) for s in args.splat_points.split(",") if s.strip())
         views = _views()
+        room_obj = os.path.join(tmp, "room.obj")
+        write_room_obj(room_obj)
+        mesh = _native.load_mesh(room_obj)
         for n in sizes:
             print(f"== {n:,} points: probes {PROBES['counts']} grid at {args.res}² baked from them ==")
             folder = os.path.join(tmp, f"probes_{n}")
             cloud, bake_seconds = _bake(_native, n, args.res, folder)
-            print(f"  bake (normals, spacing, {PROBES['counts'][0] * PROBES['counts'][1] * PROBES['counts'][2]} probes): {bake_seconds:.1f} s")
+            unknown = _unknown_texels(folder)
+            # A sparse cloud leaves texels no point reached: each is UNKNOWN to a ray that
+            # crosses it (the next probe is asked), and it keeps the coarse cells around it
+            # from being skipped.
+            print(f"  bake (normals, spacing, {PROBES['counts'][0] * PROBES['counts'][1] * PROBES['counts'][2]} probes): {bake_seconds:.1f} s; "
+                  f"unknown texels {100 * unknown:.2f}%")
             field = _native.ProbeField.load(folder)
-            if n == sizes[0]:
-                room_obj = os.path.join(tmp, "room.obj")
-                write_room_obj(room_obj)
-                mesh = _native.load_mesh(room_obj)
-                print("  probe tracing (grid walk), best of 3; Embree on the room's mesh, same rays:")
-                for name, camera in views.items():
-                    text = json.dumps(camera)
-                    one = _best_render(field, text, 1)
-                    two = _best_render(field, text, 2)
-                    row = {
-                        "view": name,
-                        "rays": one["rays"],
-                        "rays_per_second_1_thread": one["rays_per_second"],
-                        "rays_per_second_2_threads": two["rays_per_second"],
-                        "ms_per_frame_2_threads": 1000 * two["seconds"],
-                        "texels_per_ray": two["mean_steps"],
-                        "probes_per_ray": two["mean_probes"],
-                        "hit_rate": two["hits"] / two["rays"],
-                        "unknown_rate": two["unknown"] / two["rays"],
-                    }
-                    embree = _native.embree_throughput(mesh, text, threads=2, repeats=3)
-                    # Embree's packet API, the fairer match for the probe trace's runs of camera
-                    # rays: the fastest of 4, 8 and 16 rays a call.
-                    packets = {p: _native.embree_throughput(mesh, text, threads=2, repeats=3,
-                                                            packet=p)["rays_per_second"]
-                               for p in (4, 8, 16)}
-                    best_packet = max(packets, key=packets.get)
-                    # Measured as Embree's figure is: rays made beforehand, trace only.
-                    trace_only = field.trace_throughput(text, threads=2, repeats=3)
-                    row["embree_rays_per_second_2_threads"] = embree["rays_per_second"]
-                    row["embree_packet_rays_per_second_2_threads"] = packets[best_packet]
-                    row["embree_best_packet"] = best_packet
-                    row["trace_only_rays_per_second_2_threads"] = trace_only["rays_per_second"]
-                    row["trace_over_embree"] = (trace_only["rays_per_second"]
-                                                / embree["rays_per_second"])
-                    row["trace_over_embree_packets"] = (trace_only["rays_per_second"]
-                                                        / packets[best_packet])
-                    row["frame_over_embree"] = two["rays_per_second"] / embree["rays_per_second"]
-                    results["trace"].append(row)
-                    print(
-                        f"  {name}: {row['rays']:,} rays; {row['rays_per_second_1_thread'] / 1e6:.2f} M "
-                        f"rays/s on 1 thread, {row['rays_per_second_2_threads'] / 1e6:.2f} M on 2 "
-                        f"({row['ms_per_frame_2_threads']:.1f} ms/frame); {row['texels_per_ray']:.1f} "
-                        f"texels and {row['probes_per_ray']:.2f} probes per ray; HIT "
-                        f"{100 * row['hit_rate']:.1f}%, UNKNOWN {100 * row['unknown_rate']:.1f}%\n"
-                        f"    trace only (rays made beforehand, as Embree is measured): "
-                        f"{row['trace_only_rays_per_second_2_threads'] / 1e6:.2f} M rays/s; Embree "
-                        f"{row['embree_rays_per_second_2_threads'] / 1e6:.2f} M rays/s on 2 threads: "
-                        f"probe trace / Embree = {row['trace_over_embree']:.3f} (whole frame incl. "
-                        f"ray generation and pixel writes / Embree = {row['frame_over_embree']:.3f})\n"
-                        f"    Embree in packets of {best_packet} (rtcIntersect{best_packet}, its fastest "
-                        f"of 4, 8, 16): {packets[best_packet] / 1e6:.2f} M rays/s: probe trace / "
-                        f"Embree packets = {row['trace_over_embree_packets']:.3f}"
-                    )
+            print("  probe tracing (grid walk), best of 3; Embree on the room's mesh, same rays:")
+            for name, camera in views.items():
+                row = _trace_row(_native, field, mesh, name, json.dumps(camera))
+                row["points"] = n
+                row["unknown_texels"] = unknown
+                results["trace"].append(row)
             text = json.dumps(views["between probes"])
             trace = _best_render(field, text, 2)
             del field
@@ -130,7 +146,7 @@ def main(args) -> int:
                     best = stats
             del cloud
             shutil.rmtree(folder, ignore_errors=True)
-            row = {"points": n, "bake_seconds": bake_seconds,
+            row = {"points": n, "bake_seconds": bake_seconds, "unknown_texels": unknown,
                    "trace_ms_per_frame": 1000 * trace["seconds"],
                    "trace_rays_per_second": trace["rays_per_second"],
                    "trace_texels_per_ray": trace["mean_steps"],
@@ -143,9 +159,15 @@ def main(args) -> int:
                   f"({row['trace_texels_per_ray']:.1f} texels/ray); splatting the cloud "
                   f"{row['splat_ms_per_frame']:.1f} ms ({row['splat_points_per_second'] / 1e6:.1f} M "
                   f"points/s): splat/trace = {row['splat_over_trace']:.2f}\n")
-        print("summary: points, probe trace ms/frame, splat ms/frame")
+        print("summary: points, unknown texels, probe trace ms/frame, splat ms/frame")
         for row in results["sizes"]:
-            print(f"  {row['points']:>12,}  {row['trace_ms_per_frame']:8.1f}  {row['splat_ms_per_frame']:8.1f}")
+            print(f"  {row['points']:>12,}  {100 * row['unknown_texels']:6.2f}%  "
+                  f"{row['trace_ms_per_frame']:8.1f}  {row['splat_ms_per_frame']:8.1f}")
+        print("summary: probe trace only / Embree single rays, / Embree packets (2 threads)")
+        for row in results["trace"]:
+            print(f"  {row['points']:>12,}  {row['view']:<24} "
+                  f"{row['trace_only_rays_per_second_2_threads'] / 1e6:6.2f} M rays/s  "
+                  f"{row['trace_over_embree']:6.3f}  {row['trace_over_embree_packets']:6.3f}")
         if args.json:
             with open(args.json, "w", encoding="utf-8") as out:
                 json.dump(results, out, indent=2)

@@ -194,6 +194,8 @@ def _cmd_camera(args) -> int:
 
 
 def _cmd_bench(args) -> int:
+    if args.res is None:
+        args.res = 1024 if args.suite == "render" else 2048
     if args.suite == "render":
         from . import bench_render
 
@@ -298,7 +300,8 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("suite", choices=["core", "render"],
                        help="core: scan parsing and probe baking; render: probe tracing vs splatting")
     bench.add_argument("--points", type=int, default=10_000_000, help="points in the bake benchmark")
-    bench.add_argument("--res", type=int, default=2048, help="probe resolution in the bake benchmark")
+    bench.add_argument("--res", type=int, default=None,
+                       help="probe resolution (default: 2048 for core, 1024 for render)")
     bench.add_argument("--parse-points", type=int, default=2_000_000,
                        help="points in the generated file for the parsing comparison")
     bench.add_argument("--splat-points", default="1000000,10000000,30000000",
