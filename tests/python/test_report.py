@@ -88,6 +88,21 @@ def test_mesh_probes_beat_scan_probes_and_splatting_beats_points_only_at_high_re
         assert by_bake["splat + fill"]["hole_rate"] < by_bake["points only"]["hole_rate"]
 
 
+def test_reference_trace_is_timed_against_embree_on_the_same_rays(tiny_report):
+    out, data, _ = tiny_report
+    rows = data["trace_against_embree"]
+    assert [r["view"] for r in rows] == [v["name"] for v in data["scene"]["views"]]
+    for r in rows:
+        assert r["trace_rays_per_second"] > 0 and r["embree_rays_per_second"] > 0
+        assert r["embree_packet"] in (4, 8, 16)
+        assert r["trace_over_embree"] == pytest.approx(r["trace_rays_per_second"] / r["embree_rays_per_second"])
+        assert r["trace_over_embree_packets"] == pytest.approx(
+            r["trace_rays_per_second"] / r["embree_packet_rays_per_second"])
+        assert r["texels_per_ray"] >= 1 and r["probes_per_ray"] >= 1 and r["distance_to_nearest_probe"] >= 0
+    assert (out / "trace_against_embree.csv").stat().st_size > 100
+    assert any("against Embree on the same rays" in line for line in data["findings"]["speed"])
+
+
 def test_distance_walk_peers_and_stability_are_measured(tiny_report):
     out, data, _ = tiny_report
     distances = data["distance"]

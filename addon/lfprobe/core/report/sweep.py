@@ -162,6 +162,7 @@ class Sweep:
         self.walk_rows: List[Dict[str, object]] = []
         self.at_probe_rows: List[Dict[str, object]] = []
         self.ground_truth_rows: List[Dict[str, object]] = []
+        self.embree_rows: List[Dict[str, object]] = []
         self.densities: List[Density] = []
         self.reference_images: Dict[str, Tuple[dict, dict, np.ndarray, dict]] = {}
         self.reference_setting: Optional[str] = None
@@ -236,6 +237,10 @@ class Sweep:
                     if trace_label == DEFAULT_TRACE[0] and (is_reference or is_mesh_reference):
                         target = self.reference_images if is_reference else self.mesh_triplets
                         target[view.name] = (gt, image, error_map, row)
+                    if trace_label == DEFAULT_TRACE[0] and is_reference:
+                        self.embree_rows.append(self.against_embree(
+                            trace_field, camera, view.name, row,
+                            nearest_probe_distance(view.position, setup.positions())))
             if is_reference:
                 self.reference_setting = _row(setup, info, memory_per_probe, *DEFAULT_TRACE, "")["setting"]
                 self.distance_sweep(field, setup, "scan")
@@ -245,6 +250,27 @@ class Sweep:
             del field
             shutil.rmtree(folder, ignore_errors=True)
         self.at_probe()
+
+    def against_embree(self, field, camera: dict, view: str, row: Dict[str, object],
+                       eye_to_probe: float) -> Dict[str, object]:
+        """The probe trace of the reference setting against Embree on the scene's mesh, the same
+        rays measured the same way (made beforehand, trace only, fastest of the repeats): the
+        issue's aims are a third of Embree's throughput, more than Embree with the eye at a probe."""
+        ctx, p = self.ctx, self.ctx.preset
+        text = json.dumps(camera)
+        trace = field.trace_throughput(text, threads=ctx.threads, repeats=p.timing_repeats)
+        single = ctx.native.embree_throughput(ctx.mesh, text, threads=ctx.threads, repeats=p.timing_repeats)
+        packets = {width: ctx.native.embree_throughput(ctx.mesh, text, threads=ctx.threads,
+                                                       repeats=p.timing_repeats, packet=width)["rays_per_second"]
+                   for width in (4, 8, 16)}
+        best = max(packets, key=packets.get)
+        return {"view": view, "distance_to_nearest_probe": eye_to_probe,
+                "texels_per_ray": row["texels_per_ray"], "probes_per_ray": row["probes_per_ray"],
+                "trace_rays_per_second": trace["rays_per_second"],
+                "embree_rays_per_second": single["rays_per_second"],
+                "embree_packet_rays_per_second": packets[best], "embree_packet": best,
+                "trace_over_embree": trace["rays_per_second"] / single["rays_per_second"],
+                "trace_over_embree_packets": trace["rays_per_second"] / packets[best]}
 
     def _anchor_and_target(self, view, positions: List[List[float]]) -> Tuple[List[float], List[float]]:
         """The probe nearest the view's eye, and the point the eye moves toward: the centre of
