@@ -58,50 +58,51 @@ float min_texel_angle(int n) {
 }
 
 // A point as one probe sees it: offset v from the probe centre, its distance and direction,
-// its normal (oriented toward its scanner where that is known, else toward the probe) and the
-// reach of its splat's disc in its plane.
+// its normal (oriented toward its scanner where that is known, else toward the probe), normal·v
+// (its plane's offset) and the reach of its splat's disc in its plane.
 struct Surfel {
     glm::vec3 v;
     float dist = 0.0f;
     glm::vec3 dir;
     glm::vec3 normal;
+    float normal_v = 0.0f;
     float reach = 0.0f;
 };
+
+// Where the ray from the probe centre along unit `texel_dir` meets a point's surface plane:
+// the cosine between them, the depth s along the ray, and whether that is within the splat's
+// disc. Found once per texel a splat covers: the cut of the splat and the texel's depth both
+// read it.
+struct PlaneHit {
+    float cos_plane = 0.0f;
+    float s = 0.0f;
+    bool in_disc = false; // false too for a ray parallel to the plane (the disc seen edge-on)
+};
+
+PlaneHit plane_hit(const Surfel& p, const glm::vec3& texel_dir) {
+    PlaneHit h;
+    h.cos_plane = glm::dot(p.normal, texel_dir);
+    if (h.cos_plane == 0.0f) {
+        return h;
+    }
+    h.s = p.normal_v / h.cos_plane;
+    if (h.s > 0.0f) {
+        const glm::vec3 off = h.s * texel_dir - p.v;
+        h.in_disc = glm::dot(off, off) <= p.reach * p.reach;
+    }
+    return h;
+}
 
 // Depth along a texel's ray where it meets the point's surfel plane: exact for planar surfaces
 // and consistent between neighbouring texels. A plane too grazing to extrapolate from, or one
 // that puts the surface implausibly far from the point (beyond half to twice its distance, and
 // outside the splat's disc), falls back to the point's own radial distance.
-float surfel_depth(const Surfel& p, const glm::vec3& texel_dir) {
-    const float cos_plane = glm::dot(p.normal, texel_dir);
-    if (std::abs(cos_plane) >= kMinPlaneCosine) {
-        const float s = glm::dot(p.normal, p.v) / cos_plane;
-        if (s > 0.5f * p.dist && s < 2.0f * p.dist) {
-            return s;
-        }
-        const glm::vec3 off = s * texel_dir - p.v;
-        if (s > 0.0f && glm::dot(off, off) <= p.reach * p.reach) {
-            return s;
-        }
+float surfel_depth(const Surfel& p, const PlaneHit& h) {
+    if (std::abs(h.cos_plane) >= kMinPlaneCosine &&
+        ((h.s > 0.5f * p.dist && h.s < 2.0f * p.dist) || h.in_disc)) {
+        return h.s;
     }
     return p.dist;
-}
-
-// True when the ray from the probe centre along unit `texel_dir` meets the disc of `radius`
-// around `v` in the plane with unit `normal` (normal_v = normal · v). An unoriented normal
-// gives the same answer either way round.
-bool ray_meets_disc(const glm::vec3& texel_dir, const glm::vec3& v, const glm::vec3& normal,
-                    float normal_v, float radius) {
-    const float cos_plane = glm::dot(normal, texel_dir);
-    if (cos_plane == 0.0f) {
-        return false; // parallel to the plane: the disc is seen edge-on, as a line
-    }
-    const float s = normal_v / cos_plane;
-    if (!(s > 0.0f)) {
-        return false;
-    }
-    const glm::vec3 off = s * texel_dir - v;
-    return glm::dot(off, off) <= radius * radius;
 }
 
 void keep_smaller(std::uint32_t& slot, std::uint32_t value) {
@@ -168,10 +169,11 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
         p.dir = p.v / p.dist;
         const glm::vec3 normal = geometry.normals[i];
         p.normal = !geometry.oriented[i] && glm::dot(normal, p.v) > 0.0f ? -normal : normal;
+        p.normal_v = glm::dot(p.normal, p.v);
         p.reach = settings.splat_plane_reach * settings.splat_scale * geometry.spacing[i];
         return true;
     };
-    // Calls visit(texel, texel_dir, surfel) for every texel point i's splat covers: the texels
+    // Calls visit(texel, surfel, plane hit) for every texel point i's splat covers: the texels
     // in the cone of the splat radius seen face-on whose ray meets the point's surface plane
     // within splat_plane_reach splat radii of the point (BakeSettings says why).
     auto for_each_splat_texel = [&](std::size_t i, auto&& visit) {
@@ -182,7 +184,6 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
         const oct::Texel home = oct::texel_of_direction(p.dir, n);
         const float alpha = std::atan2(settings.splat_scale * geometry.spacing[i], p.dist);
         const float cos_alpha = std::cos(alpha);
-        const float normal_v = glm::dot(p.normal, p.v);
         // A point with no surface (too few neighbours for a normal) keeps the whole cone.
         const bool has_plane = glm::dot(p.normal, p.normal) > 0.0f;
         // A neighbour k texels away lies at least (k - 0.5) texel angles from `dir`.
@@ -192,14 +193,17 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
                 const std::size_t t =
                     oct::texel_index(oct::wrap_texel(home.x + dx, home.y + dy, n), n);
                 const glm::vec3& texel_dir = directions[t];
-                // The point always claims its own texel; neighbours only inside its cone where
-                // their ray meets the point's surface plane near the point.
-                if ((dx != 0 || dy != 0) &&
-                    (glm::dot(texel_dir, p.dir) < cos_alpha ||
-                     (has_plane && !ray_meets_disc(texel_dir, p.v, p.normal, normal_v, p.reach)))) {
+                const bool own = dx == 0 && dy == 0;
+                if (!own && glm::dot(texel_dir, p.dir) < cos_alpha) {
                     continue;
                 }
-                visit(t, texel_dir, p);
+                // The point always claims its own texel; neighbours only inside its cone where
+                // their ray meets the point's surface plane near the point.
+                const PlaneHit hit = plane_hit(p, texel_dir);
+                if (!own && has_plane && !hit.in_disc) {
+                    continue;
+                }
+                visit(t, p, hit);
             }
         }
     };
@@ -228,8 +232,8 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     // Pass 1: the nearest surface depth per texel.
     std::vector<std::uint32_t> front(texels, ordered_bits(kEmptyDistance));
     over_points("splatting points: depth", [&](std::size_t i) {
-        for_each_splat_texel(i, [&](std::size_t t, const glm::vec3& texel_dir, const Surfel& p) {
-            keep_smaller(front[t], ordered_bits(surfel_depth(p, texel_dir)));
+        for_each_splat_texel(i, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
+            keep_smaller(front[t], ordered_bits(surfel_depth(p, hit)));
         });
     });
     // Pass 2: among the points on that front surface (within a surface thickness of about the
@@ -238,13 +242,13 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     std::vector<std::uint64_t> winner(texels, kNoPoint);
     over_points("splatting points: colour", [&](std::size_t i) {
         const float thickness = geometry.spacing[i];
-        for_each_splat_texel(i, [&](std::size_t t, const glm::vec3& texel_dir, const Surfel& p) {
-            const float depth = surfel_depth(p, texel_dir);
+        for_each_splat_texel(i, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
+            const float depth = surfel_depth(p, hit);
             const float nearest = std::bit_cast<float>(front[t]);
             if (depth > nearest + std::max(thickness, 1e-3f * nearest)) {
                 return;
             }
-            const float off_centre = std::max(0.0f, 1.0f - glm::dot(texel_dir, p.dir));
+            const float off_centre = std::max(0.0f, 1.0f - glm::dot(directions[t], p.dir));
             keep_smaller(winner[t], (static_cast<std::uint64_t>(ordered_bits(off_centre)) << 32) |
                                         static_cast<std::uint32_t>(i));
         });
@@ -272,7 +276,7 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
         }
         Surfel p;
         (void)surfel_of(i, p); // a winner was splatted, so it has a direction
-        map.set_surface(t, surfel_depth(p, directions[t]), rgb, p.normal, 1.0f);
+        map.set_surface(t, surfel_depth(p, plane_hit(p, directions[t])), rgb, p.normal, 1.0f);
     });
     if (progress != nullptr) {
         progress->throw_if_cancelled();
