@@ -247,8 +247,10 @@ public:
                 const double cell_min = static_cast<double>(lv.value(
                     static_cast<std::size_t>(cy) * static_cast<std::size_t>(lv.resolution) +
                     static_cast<std::size_t>(cx)));
-                if (may_skip_from(cell_min, here2)) {
-                    const Move move = skip_cell(m, image, cell_min, cx, cy, shift, x, y, t, tb);
+                const double clear2 = clear2_of(cell_min);
+                if (here2 < clear2) {
+                    const Move move =
+                        skip_cell(m, image, clear2, here2, cx, cy, shift, x, y, t, tb);
                     if (move == Move::PieceDone) {
                         return false;
                     }
@@ -313,12 +315,13 @@ public:
 
     // Skips coarse cell (cx, cy) of `shift` (2^shift texels a side) when nothing in it can stop
     // the ray, moving (x, y, t) to where the fine walk would be when it leaves the cell.
-    Move skip_cell(const OctantMap& m, const OctantImage& image, double cell_min, int cx, int cy,
-                   int shift, int& x, int& y, double& t, double tb) {
+    // The ray is at squared distance here2 from the probe at t; clear2 is the cell's clear2_of.
+    Move skip_cell(const OctantMap& m, const OctantImage& image, double clear2, double here2,
+                   int cx, int cy, int shift, int& x, int& y, double& t, double tb) {
         const Event exit = first_event(image, exit_edge(m.u, cx, shift), exit_edge(m.v, cy, shift));
         if (exit.axis == kPieceEnd) {
             const double t_end = std::max(tb, t);
-            if (!skippable(cell_min, t, t_end)) {
+            if (!skippable(clear2, here2, t_end)) {
                 return Move::Stay;
             }
             if (t_end > t) {
@@ -332,7 +335,7 @@ public:
             const double t_edge = crossing(m, c, exit.edge);
             if (t_edge <= tb) {
                 const double t_exit = std::max(t_edge, t);
-                if (!skippable(cell_min, t, t_exit)) {
+                if (!skippable(clear2, here2, t_exit)) {
                     return Move::Stay;
                 }
                 // The exit axis enters the texel past the cell's edge; the other is wherever
@@ -358,7 +361,7 @@ public:
         const double exit_x = cell_exit(m, m.u, cx, shift);
         const double exit_y = cell_exit(m, m.v, cy, shift);
         const double t_exit = std::max(std::min({exit_x, exit_y, tb}), t);
-        if (!skippable(cell_min, t, t_exit)) {
+        if (!skippable(clear2, here2, t_exit)) {
             return Move::Stay;
         }
         // Along the axis whose cell edge ends the skip, the landing texel is next to that
@@ -687,37 +690,30 @@ private:
         return index;
     }
 
-    // False when the ray, at squared distance `here2` from the probe where a skip would start,
-    // is already too far for a cell of minimum distance `cell_min` to be skippable (skippable
-    // would say no for any end of the skip); one comparison, before the cell's exit is sought.
-    [[nodiscard]] bool may_skip_from(double cell_min, double here2) const {
+    // The squared distance from the probe below which the ray passes clearly in front of every
+    // fine texel under a coarse cell of minimum distance `cell_min` (r − thickness(r) grows
+    // with r since texel_scale_ < 1; less a margin that covers the rounding of the squared
+    // distances compared with it): +inf for an empty cell, −1 where nothing can be passed
+    // (unknown texels, or a surface within its thickness of the probe).
+    [[nodiscard]] double clear2_of(double cell_min) const {
         if (std::isinf(cell_min)) {
-            return true;
+            return kInf;
         }
-        const double clear = clear_distance(cell_min);
-        return clear > 0.0 && here2 < clear * clear;
+        const double clear = cell_min - thickness(cell_min) - 1e-9 * (1.0 + cell_min);
+        return clear > 0.0 ? clear * clear : -1.0;
     }
 
-    // How far from the probe the ray may be and still pass clearly in front of every texel of
-    // a cell of minimum distance `cell_min`: r − thickness(r) grows with r (texel_scale_ < 1),
-    // less a margin that covers the rounding of the squared distances compared with it.
-    [[nodiscard]] double clear_distance(double cell_min) const {
-        return cell_min - thickness(cell_min) - 1e-9 * (1.0 + cell_min);
-    }
-
-    // True when no fine texel under a coarse cell of minimum distance `cell_min` can stop the
-    // ray over [t0, t1]: each is empty or clearly behind the ray (r − thickness(r) > the ray's
-    // largest distance; r − thickness(r) grows with r since texel_scale_ < 1).
-    [[nodiscard]] bool skippable(double cell_min, double t0, double t1) const {
-        if (std::isinf(cell_min)) {
+    // True when no fine texel under a cell of squared clear distance `clear2` can stop the ray
+    // over [t, t1], the ray at squared distance `here2` at t: each is empty or clearly behind
+    // the ray, whose largest distance is at an end.
+    [[nodiscard]] bool skippable(double clear2, double here2, double t1) const {
+        if (std::isinf(clear2)) {
             return true;
         }
-        const double clear = clear_distance(cell_min);
-        if (!(clear > 0.0) || !std::isfinite(t1)) {
+        if (!std::isfinite(t1)) {
             return false;
         }
-        // Squared, without the square root: the margin covers the rounding either way.
-        return std::max(distance2(t0), distance2(t1)) < clear * clear;
+        return std::max(here2, distance2(t1)) < clear2;
     }
 
     // The first t in [t0, t1] with |o + t d| = r (t² + 2bt + c = 0, stable form), or, when
