@@ -184,7 +184,14 @@ std::uint64_t count_packet_hits(RTCScene scene, const Ray* rays, std::size_t cou
 
 } // namespace
 
+void EmbreeScene::check_packet(int packet) {
+    if (packet != 1 && packet != 4 && packet != 8 && packet != 16) {
+        throw InputError("Embree: a packet is 1, 4, 8 or 16 rays, got " + std::to_string(packet));
+    }
+}
+
 std::uint64_t EmbreeScene::count_hits(const Ray* rays, std::size_t count, int packet) const {
+    check_packet(packet);
     switch (packet) {
     case 1: {
         std::uint64_t hits = 0;
@@ -204,7 +211,7 @@ std::uint64_t EmbreeScene::count_hits(const Ray* rays, std::size_t count, int pa
     default:
         break;
     }
-    throw InputError("Embree: a packet is 1, 4, 8 or 16 rays, got " + std::to_string(packet));
+    return 0; // unreachable: check_packet took every other width
 }
 
 glm::vec3 EmbreeScene::facing(const glm::vec3& n, const glm::dvec3& direction) {

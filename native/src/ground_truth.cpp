@@ -131,10 +131,7 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
 
 ThroughputResult embree_throughput(const EmbreeScene& scene, const Camera& camera, int repeats,
                                    int packet) {
-    if (packet != 1 && packet != 4 && packet != 8 && packet != 16) {
-        throw InputError("embree throughput: packet must be 1, 4, 8 or 16, got " +
-                         std::to_string(packet));
-    }
+    EmbreeScene::check_packet(packet); // before the rays are made and the clock runs
     return measure_batch_throughput(
         camera, scene.mesh().world_offset, repeats, "embree",
         [&](const Ray* rays, std::size_t count) { return scene.count_hits(rays, count, packet); });

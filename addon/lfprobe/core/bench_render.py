@@ -16,6 +16,7 @@ import time
 from . import native
 from .bench import room_cloud, room_surface_area, write_room_obj
 from .camera_json import camera_dict
+from .embree_rates import embree_rates
 
 PROBES = {"min": [0.75, 1.0, 1.4], "max": [2.25, 5.0, 1.4], "counts": [2, 3, 1]}
 
@@ -71,22 +72,17 @@ def _trace_row(_native, field, mesh, name: str, text: str) -> dict:
         "hit_rate": two["hits"] / two["rays"],
         "unknown_rate": two["unknown"] / two["rays"],
     }
-    embree = _native.embree_throughput(mesh, text, threads=2, repeats=3)
-    # Embree's packet API, the fairer match for the probe trace's runs of camera rays: the
-    # fastest of 4, 8 and 16 rays a call.
-    packets = {p: _native.embree_throughput(mesh, text, threads=2, repeats=3,
-                                            packet=p)["rays_per_second"]
-               for p in (4, 8, 16)}
-    best_packet = max(packets, key=packets.get)
+    embree = embree_rates(_native, mesh, text, threads=2, repeats=3)
     # Measured as Embree's figure is: rays made beforehand, trace only.
     trace_only = field.trace_throughput(text, threads=2, repeats=3)
-    row["embree_rays_per_second_2_threads"] = embree["rays_per_second"]
-    row["embree_packet_rays_per_second_2_threads"] = packets[best_packet]
+    best_packet = embree["packet_width"]
+    row["embree_rays_per_second_2_threads"] = embree["single"]
+    row["embree_packet_rays_per_second_2_threads"] = embree["packet"]
     row["embree_best_packet"] = best_packet
     row["trace_only_rays_per_second_2_threads"] = trace_only["rays_per_second"]
-    row["trace_over_embree"] = trace_only["rays_per_second"] / embree["rays_per_second"]
-    row["trace_over_embree_packets"] = trace_only["rays_per_second"] / packets[best_packet]
-    row["frame_over_embree"] = two["rays_per_second"] / embree["rays_per_second"]
+    row["trace_over_embree"] = trace_only["rays_per_second"] / embree["single"]
+    row["trace_over_embree_packets"] = trace_only["rays_per_second"] / embree["packet"]
+    row["frame_over_embree"] = two["rays_per_second"] / embree["single"]
     print(
         f"  {name}: {row['rays']:,} rays; {row['rays_per_second_1_thread'] / 1e6:.2f} M "
         f"rays/s on 1 thread, {row['rays_per_second_2_threads'] / 1e6:.2f} M on 2 "
@@ -99,7 +95,7 @@ def _trace_row(_native, field, mesh, name: str, text: str) -> dict:
         f"probe trace / Embree = {row['trace_over_embree']:.3f} (whole frame incl. "
         f"ray generation and pixel writes / Embree = {row['frame_over_embree']:.3f})\n"
         f"    Embree in packets of {best_packet} (rtcIntersect{best_packet}, its fastest "
-        f"of 4, 8, 16): {packets[best_packet] / 1e6:.2f} M rays/s: probe trace / "
+        f"of 4, 8, 16): {embree['packet'] / 1e6:.2f} M rays/s: probe trace / "
         f"Embree packets = {row['trace_over_embree_packets']:.3f}"
     )
     return row

@@ -53,6 +53,8 @@ public:
     // 16: rtcIntersect4/8/16, the API for coherent rays such as a camera's) or one at a time
     // (1: rtcIntersect1). InputError for another packet size.
     [[nodiscard]] std::uint64_t count_hits(const Ray* rays, std::size_t count, int packet) const;
+    // InputError unless `packet` is one of the widths count_hits takes.
+    static void check_packet(int packet);
 
     // Normal `n` turned to face a viewer looking along `direction`.
     [[nodiscard]] static glm::vec3 facing(const glm::vec3& n, const glm::dvec3& direction);

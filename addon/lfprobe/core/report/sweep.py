@@ -17,6 +17,7 @@ import numpy as np
 from .. import pipeline
 from ..cli_mesh import bake_from_mesh
 from ..pipeline import BakeOptions, ProbePlacementSpec
+from ..embree_rates import embree_rates
 from .measure import RunContext, measure, nearest_probe_distance, pixel_count, psnr_only, timing
 from .presets import BAKE_VARIANTS, COMPACT_TRACE, DEFAULT_TRACE, LOAD_KEYS
 from .scene import grid_positions
@@ -259,18 +260,14 @@ class Sweep:
         ctx, p = self.ctx, self.ctx.preset
         text = json.dumps(camera)
         trace = field.trace_throughput(text, threads=ctx.threads, repeats=p.timing_repeats)
-        single = ctx.native.embree_throughput(ctx.mesh, text, threads=ctx.threads, repeats=p.timing_repeats)
-        packets = {width: ctx.native.embree_throughput(ctx.mesh, text, threads=ctx.threads,
-                                                       repeats=p.timing_repeats, packet=width)["rays_per_second"]
-                   for width in (4, 8, 16)}
-        best = max(packets, key=packets.get)
+        embree = embree_rates(ctx.native, ctx.mesh, text, ctx.threads, p.timing_repeats)
         return {"view": view, "distance_to_nearest_probe": eye_to_probe,
                 "texels_per_ray": row["texels_per_ray"], "probes_per_ray": row["probes_per_ray"],
                 "trace_rays_per_second": trace["rays_per_second"],
-                "embree_rays_per_second": single["rays_per_second"],
-                "embree_packet_rays_per_second": packets[best], "embree_packet": best,
-                "trace_over_embree": trace["rays_per_second"] / single["rays_per_second"],
-                "trace_over_embree_packets": trace["rays_per_second"] / packets[best]}
+                "embree_rays_per_second": embree["single"],
+                "embree_packet_rays_per_second": embree["packet"], "embree_packet": embree["packet_width"],
+                "trace_over_embree": trace["rays_per_second"] / embree["single"],
+                "trace_over_embree_packets": trace["rays_per_second"] / embree["packet"]}
 
     def _anchor_and_target(self, view, positions: List[List[float]]) -> Tuple[List[float], List[float]]:
         """The probe nearest the view's eye, and the point the eye moves toward: the centre of
