@@ -943,12 +943,13 @@ ProbeTraceResult lookup_probe(const ProbeMap& map, const glm::dvec3& direction, 
 
 ProbeTraceResult trace_probe(const ProbeMap& map, const MinDistancePyramid* levels, const Ray& ray,
                              const TraceSettings& settings) {
-    check_inputs(map, ray.direction);
-    const glm::dvec3 d = glm::normalize(ray.direction);
     const glm::dvec3& o = ray.origin;
     if (glm::length(o) <= settings.eye_at_probe_distance) {
+        // The lookup checks the map and the direction itself.
         return ProbeLookup(map, settings).lookup(ray.direction, ray.t_min, ray.t_max);
     }
+    check_inputs(map, ray.direction);
+    const glm::dvec3 d = glm::normalize(ray.direction);
     Tracer tracer(map, levels, o, d, settings);
     const double t_lo = ray.t_min;
     const double t_hi = ray.t_max;
