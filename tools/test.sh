@@ -5,7 +5,22 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
-export LFPROBE_SHARED_DATA="${LFPROBE_SHARED_DATA:-$root/../shared/data}"
+# The shared test data (DESIGN.md: ../shared/data beside the checkout). A clone made elsewhere
+# from a local checkout (git clone /path/to/checkout) finds it beside the checkout it came from.
+if [ -z "${LFPROBE_SHARED_DATA:-}" ]; then
+  LFPROBE_SHARED_DATA="$root/../shared/data"
+  origin="$(git -C "$root" remote get-url origin 2>/dev/null || true)"
+  if [ ! -d "$LFPROBE_SHARED_DATA" ] && [ -n "$origin" ] && [ -d "$origin/../shared/data" ]; then
+    LFPROBE_SHARED_DATA="$(cd "$origin/../shared/data" && pwd)"
+  fi
+fi
+if [ ! -d "$LFPROBE_SHARED_DATA/scans" ] || [ ! -d "$LFPROBE_SHARED_DATA/meshes" ]; then
+  echo "tools/test.sh: the shared test data is not at $LFPROBE_SHARED_DATA (expected scans/ and" \
+    "meshes/ there, the project's ../shared/data): set LFPROBE_SHARED_DATA to its folder" >&2
+  exit 2
+fi
+export LFPROBE_SHARED_DATA
+echo "test data: $LFPROBE_SHARED_DATA"
 
 echo "== build (Release, -Werror) =="
 LFPROBE_WERROR=1 bash tools/setup.sh

@@ -12,11 +12,12 @@
 #include "lfprobe/ground_truth.hpp"
 #include "lfprobe/mesh_reader.hpp"
 #include "lfprobe/probe_trace.hpp"
+#include "test_data.hpp"
 
 namespace lfprobe {
 namespace {
 
-const std::string kMeshes = std::string(LFPROBE_SHARED_DATA) + "/meshes";
+const std::string kMeshes = lfprobe::testing::shared_data("meshes");
 
 // A closed box room [-2,2] × [-3,3] × [0,2.5], one object and one material per wall.
 std::string box_room_obj() {

@@ -11,11 +11,12 @@
 #include "lfprobe/color.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/mesh_reader.hpp"
+#include "test_data.hpp"
 
 namespace lfprobe {
 namespace {
 
-const std::string kMeshes = std::string(LFPROBE_SHARED_DATA) + "/meshes";
+const std::string kMeshes = lfprobe::testing::shared_data("meshes");
 
 std::string temp_file(const std::string& name, const std::string& text) {
     const auto dir = std::filesystem::temp_directory_path() / "lfprobe_mesh_reader_test";

@@ -13,6 +13,7 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/progress.hpp"
 #include "lfprobe/scan_cache.hpp"
+#include "test_data.hpp"
 
 using namespace lfprobe;
 namespace fs = std::filesystem;
@@ -32,9 +33,7 @@ void write_file(const fs::path& path, const std::string& content) {
 }
 
 std::string shared_scan(const std::string& name) {
-    const char* from_environment = std::getenv("LFPROBE_SHARED_DATA");
-    const std::string root = from_environment != nullptr ? from_environment : LFPROBE_SHARED_DATA;
-    return root + "/scans/" + name;
+    return lfprobe::testing::shared_data("scans/" + name);
 }
 
 std::vector<fs::path> files_in(const fs::path& dir) {

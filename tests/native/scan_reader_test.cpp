@@ -20,6 +20,7 @@
 #include "lfprobe/mapped_file.hpp"
 #include "lfprobe/progress.hpp"
 #include "lfprobe/scan_reader.hpp"
+#include "test_data.hpp"
 
 using namespace lfprobe;
 namespace fs = std::filesystem;
@@ -46,11 +47,8 @@ ScanFile read(const std::string& name, const std::string& content,
     return read_scan_file(write_file(name, content), options);
 }
 
-// The test data folder; the environment variable LFPROBE_SHARED_DATA overrides the build's.
 std::string shared_scan(const std::string& name) {
-    const char* from_environment = std::getenv("LFPROBE_SHARED_DATA");
-    const std::string root = from_environment != nullptr ? from_environment : LFPROBE_SHARED_DATA;
-    return root + "/scans/" + name;
+    return lfprobe::testing::shared_data("scans/" + name);
 }
 
 // Expects read() to throw InputError whose message holds every one of `parts`.
