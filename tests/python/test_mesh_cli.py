@@ -7,10 +7,11 @@ import os
 
 import pytest
 
+from conftest import SHARED_DATA
 from lfprobe.core import cli, cli_mesh, native
 from lfprobe.core.pipeline import BakeOptions, ProbePlacementSpec
 
-DATA = os.path.join(os.path.dirname(__file__), "..", "..", "..", "shared", "data", "meshes")
+DATA = os.path.join(SHARED_DATA, "meshes")
 CORNELL = os.path.join(DATA, "cornell_box", "CornellBox-Original.obj")
 
 

@@ -15,9 +15,11 @@ import numpy as np
 from . import native
 from .probe_set import PAPER_BYTES_PER_2048_PROBE, coarse_level_bytes, summarize
 
+# The project's shared test data: LFPROBE_SHARED_DATA, else ../shared/data beside the checkout.
 SHARED_PUMP_XYZ = os.path.join(
-    os.path.dirname(__file__), "..", "..", "..", "..", "shared", "data", "scans", "pumpA_xyzrgb.xyz"
-)
+    os.environ.get("LFPROBE_SHARED_DATA")
+    or os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "shared", "data"),
+    "scans", "pumpA_xyzrgb.xyz")
 
 
 def _best_of(fn, repeats: int) -> float:
