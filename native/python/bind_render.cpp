@@ -124,23 +124,33 @@ void bind_render(py::module_& m) {
         .def(
             "trace_throughput",
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
-               const std::string& mode, int threads, int repeats) {
+               const std::string& mode, int threads, int repeats, const std::string& start) {
                 const Camera cam = camera_from(camera);
                 const RenderSettings settings =
                     render_settings(mode, TraceSettings{}.thickness, true, 32);
+                if (start != "camera" && start != "answer") {
+                    throw InputError(
+                        "trace_throughput: start must be \"camera\" or \"answer\", got \"" + start +
+                        "\"");
+                }
+                const ThroughputStart from =
+                    start == "answer" ? ThroughputStart::Answer : ThroughputStart::Camera;
                 ThroughputResult r;
                 {
                     py::gil_scoped_release release;
                     r = on_threads(threads, [&] {
-                        return probe_trace_throughput(*field, cam, settings, repeats);
+                        return probe_trace_throughput(*field, cam, settings, repeats, from);
                     });
                 }
                 return throughput_dict(r);
             },
             py::arg("camera"), py::arg("mode") = "auto", py::arg("threads") = 0,
-            py::arg("repeats") = 3,
+            py::arg("repeats") = 3, py::arg("start") = "camera",
             "Probe-trace rays per second measured as embree_throughput measures Embree's: the "
-            "camera's pixel-centre rays made beforehand, trace only, fastest of `repeats`.")
+            "camera's pixel-centre rays made beforehand, trace only, fastest of `repeats`. "
+            "start=\"answer\": each ray starts where its own trace from the camera ended (its "
+            "HIT, or as far as an UNKNOWN proved it free), so that no empty space is left to "
+            "skip: the cost of a trace however little it walks.")
         .def(
             "start_render",
             [](std::shared_ptr<ProbeField> field, const std::string& camera,

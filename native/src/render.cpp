@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
 #include <optional>
 #include <vector>
 
@@ -107,19 +108,50 @@ void trace_camera_rays(const ProbeField& field, const EyeProbe& eye, const Ray* 
 
 } // namespace
 
-ThroughputResult probe_trace_throughput(const ProbeField& field, const Camera& camera,
-                                        const RenderSettings& settings, int repeats) {
+std::vector<Ray> rays_started_at_answers(const ProbeField& field, const Camera& camera,
+                                         const RenderSettings& settings) {
     FieldTraceSettings trace = settings.trace;
     trace.mode = field.resolve_mode(settings.trace);
     const glm::dvec3 offset = field.world_offset();
     const EyeProbe eye(field, camera.position() - offset, trace.probe);
-    return measure_batch_throughput(
-        camera, offset, repeats, "probe trace", [&](const Ray* rays, std::size_t count) {
+    std::vector<Ray> rays = camera_local_rays(camera, offset);
+    const std::size_t batches = (rays.size() + kRayBatch - 1) / kRayBatch;
+    tbb::parallel_for(std::size_t{0}, batches, [&](std::size_t batch) {
+        Ray* first = rays.data() + batch * kRayBatch;
+        const std::size_t size = std::min(kRayBatch, rays.size() - batch * kRayBatch);
+        std::array<FieldTraceResult, kRayBatch> hits;
+        trace_camera_rays(field, eye, first, size, trace, hits.data());
+        for (std::size_t k = 0; k < size; ++k) {
+            const FieldTraceResult& h = hits[k];
+            const double end = h.status == TraceStatus::Hit ? h.t : h.free_until;
+            if (h.status != TraceStatus::Miss && std::isfinite(end)) {
+                first[k].t_min = std::max(first[k].t_min, end);
+            }
+        }
+    });
+    return rays;
+}
+
+ThroughputResult probe_trace_throughput(const ProbeField& field, const Camera& camera,
+                                        const RenderSettings& settings, int repeats,
+                                        ThroughputStart start) {
+    if (repeats < 1) {
+        throw InputError("probe trace throughput: repeats must be at least 1");
+    }
+    FieldTraceSettings trace = settings.trace;
+    trace.mode = field.resolve_mode(settings.trace);
+    const glm::dvec3 offset = field.world_offset();
+    const EyeProbe eye(field, camera.position() - offset, trace.probe);
+    const std::vector<Ray> rays = start == ThroughputStart::Answer
+                                      ? rays_started_at_answers(field, camera, settings)
+                                      : camera_local_rays(camera, offset);
+    return measure_rays_throughput(
+        rays, repeats, "probe trace", [&](const Ray* batch, std::size_t count) {
             std::array<FieldTraceResult, kRayBatch> hits;
             std::uint64_t hit_count = 0;
             for (std::size_t first = 0; first < count; first += kRayBatch) {
                 const std::size_t size = std::min(kRayBatch, count - first);
-                trace_camera_rays(field, eye, rays + first, size, trace, hits.data());
+                trace_camera_rays(field, eye, batch + first, size, trace, hits.data());
                 for (std::size_t k = 0; k < size; ++k) {
                     hit_count += hits[k].status == TraceStatus::Hit ? 1 : 0;
                 }

@@ -331,3 +331,50 @@ TEST(Render, TraceThroughputTracesTheSameRaysAsTheImage) {
 
 } // namespace
 } // namespace lfprobe
+
+namespace lfprobe {
+namespace {
+
+TEST(Render, RaysStartedAtTheirAnswersBeginWhereTheImageEnds) {
+    // The floor under the throughput figure: each ray restarted at its own answer (the image's
+    // depth for a HIT), so that nothing is left to skip; traced again, it walks less.
+    const ProbeField& field = baked_box_room();
+    const Camera camera = Camera::look_at({0.3, -0.2, 1.1}, {-1.0, 0.4, 0.9}, 48, 32, 18.0);
+    RenderStats stats;
+    const RenderedImage image = render_probe_view(field, camera, {}, nullptr, &stats);
+    const std::vector<Ray> rays = rays_started_at_answers(field, camera);
+    ASSERT_EQ(rays.size(), image.pixel_count());
+    const CameraRays camera_rays(camera);
+    std::uint64_t steps_from_camera = 0;
+    std::uint64_t steps_from_answer = 0;
+    std::uint64_t hits_again = 0;
+    for (std::size_t i = 0; i < rays.size(); ++i) {
+        const int x = static_cast<int>(i % static_cast<std::size_t>(camera.width));
+        const int y = static_cast<int>(i / static_cast<std::size_t>(camera.width));
+        const Ray from_camera = camera_rays.local_pixel_ray(x, y, field.world_offset());
+        EXPECT_EQ(rays[i].origin, from_camera.origin);
+        EXPECT_EQ(rays[i].direction, from_camera.direction);
+        const auto status = static_cast<TraceStatus>(image.status[i]);
+        if (status == TraceStatus::Hit) {
+            EXPECT_EQ(static_cast<float>(rays[i].t_min), image.depth[i]);
+        } else if (status == TraceStatus::Miss) {
+            EXPECT_EQ(rays[i].t_min, from_camera.t_min);
+        } else {
+            EXPECT_GE(rays[i].t_min, from_camera.t_min);
+        }
+        steps_from_camera += field.trace(from_camera).steps;
+        const FieldTraceResult again = field.trace(rays[i]);
+        steps_from_answer += again.steps;
+        hits_again += again.status == TraceStatus::Hit ? 1 : 0;
+    }
+    EXPECT_LT(steps_from_answer, steps_from_camera);
+    // A ray started at its HIT meets the same surface there.
+    EXPECT_GE(hits_again, stats.hits * 99 / 100);
+    const ThroughputResult t =
+        probe_trace_throughput(field, camera, {}, 2, ThroughputStart::Answer);
+    EXPECT_EQ(t.rays, stats.rays);
+    EXPECT_EQ(t.hits, hits_again);
+}
+
+} // namespace
+} // namespace lfprobe

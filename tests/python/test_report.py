@@ -99,6 +99,9 @@ def test_reference_trace_is_timed_against_embree_on_the_same_rays(tiny_report):
         assert r["trace_over_embree_packets"] == pytest.approx(
             r["trace_rays_per_second"] / r["embree_packet_rays_per_second"])
         assert r["texels_per_ray"] >= 1 and r["probes_per_ray"] >= 1 and r["distance_to_nearest_probe"] >= 0
+        assert r["trace_from_answer_rays_per_second"] > 0
+        assert r["trace_from_answer_over_embree"] == pytest.approx(
+            r["trace_from_answer_rays_per_second"] / r["embree_rays_per_second"])
     assert (out / "trace_against_embree.csv").stat().st_size > 100
     assert any("against Embree on the same rays" in line for line in data["findings"]["speed"])
 

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -55,11 +56,29 @@ struct RenderStats {
                                               Progress* progress = nullptr,
                                               RenderStats* stats = nullptr);
 
+// Where the rays probe_trace_throughput times start.
+enum class ThroughputStart {
+    // At the camera: the figure compared with Embree's.
+    Camera,
+    // Where each ray's own trace from the camera ended (its HIT, or as far as an UNKNOWN proved
+    // it free; a MISS starts at the camera), so that no empty space is left to skip: what a
+    // trace costs however little it walks, the floor under the figure above.
+    Answer,
+};
+
+// The camera's pixel-centre rays in the field's local frame, each started where its own trace
+// from the camera ended: t_min moved to its HIT, or as far as an UNKNOWN proved it free (a MISS
+// keeps its start). Traced again, they have no empty space left to skip.
+[[nodiscard]] std::vector<Ray> rays_started_at_answers(const ProbeField& field,
+                                                       const Camera& camera,
+                                                       const RenderSettings& settings = {});
+
 // Probe-trace throughput measured exactly as embree_throughput measures Embree's (throughput.hpp):
 // the same rays, trace only, so that the two figures make a fair ratio.
-[[nodiscard]] ThroughputResult probe_trace_throughput(const ProbeField& field, const Camera& camera,
-                                                      const RenderSettings& settings = {},
-                                                      int repeats = 3);
+[[nodiscard]] ThroughputResult
+probe_trace_throughput(const ProbeField& field, const Camera& camera,
+                       const RenderSettings& settings = {}, int repeats = 3,
+                       ThroughputStart start = ThroughputStart::Camera);
 
 // The counts of an image already rendered (status and steps channels; seconds left 0).
 [[nodiscard]] RenderStats stats_of(const RenderedImage& image);

@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -29,17 +30,9 @@ struct ThroughputResult {
     int repeats = 0;
 };
 
-// Times `count_hits(const Ray* rays, std::size_t count) -> hits among them` over the camera's
-// pixel-centre rays in the local frame of `world_offset`, handed out in runs of up to 1024
-// consecutive rays (a tracer may work on several rays at once). `who` names the tracer in
-// errors.
-template <class CountHits>
-[[nodiscard]] ThroughputResult
-measure_batch_throughput(const Camera& camera, const glm::dvec3& world_offset, int repeats,
-                         const std::string& who, CountHits&& count_hits) {
-    if (repeats < 1) {
-        throw InputError(who + " throughput: repeats must be at least 1");
-    }
+// The camera's pixel-centre rays, row by row, in the local frame of `world_offset`.
+[[nodiscard]] inline std::vector<Ray> camera_local_rays(const Camera& camera,
+                                                        const glm::dvec3& world_offset) {
     std::vector<Ray> rays(static_cast<std::size_t>(camera.width) *
                           static_cast<std::size_t>(camera.height));
     const CameraRays camera_rays(camera);
@@ -48,6 +41,19 @@ measure_batch_throughput(const Camera& camera, const glm::dvec3& world_offset, i
             rays[static_cast<std::size_t>(y) * static_cast<std::size_t>(camera.width) +
                  static_cast<std::size_t>(x)] = camera_rays.local_pixel_ray(x, y, world_offset);
         }
+    }
+    return rays;
+}
+
+// Times `count_hits(const Ray* rays, std::size_t count) -> hits among them` over `rays`,
+// handed out in runs of up to 1024 consecutive rays (a tracer may work on several rays at
+// once). `who` names the tracer in errors.
+template <class CountHits>
+[[nodiscard]] ThroughputResult measure_rays_throughput(const std::vector<Ray>& rays, int repeats,
+                                                       const std::string& who,
+                                                       CountHits&& count_hits) {
+    if (repeats < 1) {
+        throw InputError(who + " throughput: repeats must be at least 1");
     }
     ThroughputResult result;
     result.rays = rays.size();
@@ -70,6 +76,19 @@ measure_batch_throughput(const Camera& camera, const glm::dvec3& world_offset, i
     result.rays_per_second =
         result.seconds > 0.0 ? static_cast<double>(result.rays) / result.seconds : 0.0;
     return result;
+}
+
+// measure_rays_throughput over the camera's pixel-centre rays in the local frame of
+// `world_offset`.
+template <class CountHits>
+[[nodiscard]] ThroughputResult
+measure_batch_throughput(const Camera& camera, const glm::dvec3& world_offset, int repeats,
+                         const std::string& who, CountHits&& count_hits) {
+    if (repeats < 1) {
+        throw InputError(who + " throughput: repeats must be at least 1");
+    }
+    return measure_rays_throughput(camera_local_rays(camera, world_offset), repeats, who,
+                                   std::forward<CountHits>(count_hits));
 }
 
 // The same for a tracer of one ray at a time: `is_hit(const Ray&) -> bool`.

@@ -260,6 +260,9 @@ class Sweep:
         ctx, p = self.ctx, self.ctx.preset
         text = json.dumps(camera)
         trace = field.trace_throughput(text, threads=ctx.threads, repeats=p.timing_repeats)
+        # The same rays started at their own answers: the part of the cost no skipping removes.
+        floor = field.trace_throughput(text, threads=ctx.threads, repeats=p.timing_repeats,
+                                       start="answer")
         embree = embree_rates(ctx.native, ctx.mesh, text, ctx.threads, p.timing_repeats)
         return {"view": view, "distance_to_nearest_probe": eye_to_probe,
                 "texels_per_ray": row["texels_per_ray"], "probes_per_ray": row["probes_per_ray"],
@@ -267,7 +270,9 @@ class Sweep:
                 "embree_rays_per_second": embree["single"],
                 "embree_packet_rays_per_second": embree["packet"], "embree_packet": embree["packet_width"],
                 "trace_over_embree": trace["rays_per_second"] / embree["single"],
-                "trace_over_embree_packets": trace["rays_per_second"] / embree["packet"]}
+                "trace_over_embree_packets": trace["rays_per_second"] / embree["packet"],
+                "trace_from_answer_rays_per_second": floor["rays_per_second"],
+                "trace_from_answer_over_embree": floor["rays_per_second"] / embree["single"]}
 
     def _anchor_and_target(self, view, positions: List[List[float]]) -> Tuple[List[float], List[float]]:
         """The probe nearest the view's eye, and the point the eye moves toward: the centre of
