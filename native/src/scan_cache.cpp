@@ -1,7 +1,8 @@
 // Binary cache of parsed scan files. An entry is named by a hash of the file's absolute path,
 // the read options and the cache format version, so a changed file rewrites its one entry
 // instead of leaving stale ones behind; the header repeats those fields with the file's size
-// and modification time, so that a hash collision or a stale entry is recognised and ignored. The arrays follow the header raw, read back with one copy each.
+// and modification time, so that a hash collision or a stale entry is recognised and ignored.
+// The arrays follow the header raw, read back with one copy each.
 #include "lfprobe/scan_cache.hpp"
 
 #include <array>
