@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# Every test: installs and builds what is missing (tools/setup.sh, with -Werror), runs the
-# GoogleTest suite, builds and runs it again under AddressSanitizer + UndefinedBehaviorSanitizer,
-# then the pytest suite of the bpy-free Python.
+# Every test: installs and builds what is missing (tools/setup.sh, with -Werror), checks the
+# C++ sources' formatting, runs the GoogleTest suite, builds and runs it again under
+# AddressSanitizer + UndefinedBehaviorSanitizer, then the pytest suite of the bpy-free Python.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -24,6 +24,9 @@ echo "test data: $LFPROBE_SHARED_DATA"
 
 echo "== build (Release, -Werror) =="
 LFPROBE_WERROR=1 bash tools/setup.sh
+
+echo "== C++ formatting (clang-format, the repository's .clang-format) =="
+git ls-files -z '*.cpp' '*.hpp' | xargs -0 clang-format --dry-run --Werror
 
 echo "== native tests =="
 (cd build && ctest --output-on-failure -j"$(nproc)")
