@@ -2,9 +2,8 @@
 run. Prints rays per second on 1 and 2 threads, texels visited per ray, the ratio to Embree's
 primary-ray throughput on the room's mesh for the same rays (and for the same rays started at
 their own answers: the part of a trace's cost that skipping empty space cannot remove), and
-milliseconds per frame of the
-splat baseline for growing clouds (tracing does not depend on the cloud's size:
-the probes hold a fixed number of texels)."""
+milliseconds per frame of the splat baseline for growing clouds (tracing does not depend on the
+cloud's size: the probes hold a fixed number of texels)."""
 
 from __future__ import annotations
 
