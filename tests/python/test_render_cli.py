@@ -68,6 +68,22 @@ def test_background_render_equals_render_and_cancels(native, room):
         job.result()
 
 
+def test_trace_throughput_times_the_image_rays_and_the_same_rays_from_their_answers(native, room):
+    """trace_throughput: the camera's rays (the figure compared with Embree) count the image's
+    hits; start="answer" starts each where its trace ended, and those meet the same surfaces."""
+    field = native.ProbeField.load(str(room["probes"]))
+    camera = room["camera"].read_text()
+    _, stats = field.render(camera, threads=2)
+    from_camera = field.trace_throughput(camera, threads=2, repeats=1)
+    from_answer = field.trace_throughput(camera, threads=2, repeats=1, start="answer")
+    assert from_camera["rays"] == from_answer["rays"] == stats["rays"]
+    assert from_camera["hits"] == stats["hits"]
+    assert from_answer["hits"] >= 0.99 * stats["hits"]
+    assert from_camera["rays_per_second"] > 0 and from_answer["rays_per_second"] > 0
+    with pytest.raises(ValueError, match='start must be "camera" or "answer"'):
+        field.trace_throughput(camera, start="nowhere")
+
+
 def test_splat_baseline_renders_the_same_camera(native, room):
     out = room["folder"] / "splat.exr"
     result = run_cli("splat", "--scan", room["scan"], "--scanner", 0, 0, 1.25, "--camera",
