@@ -200,20 +200,17 @@ BakeSummary bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry&
     ProbeSetManifest manifest;
     manifest.world_offset = cloud.world_offset;
     manifest.placement = placement;
-    manifest.bake = json{{"source", "point cloud"},
-                         {"resolution", "per probe (planned)"},
-                         {"splat_scale", settings.bake.splat_scale},
-                         {"max_splat_radius_texels", settings.bake.max_splat_radius_texels},
-                         {"splat_plane_reach", settings.bake.splat_plane_reach},
-                         {"hole_fill_texels", settings.bake.hole_fill_texels},
-                         {"points", cloud.size()},
-                         {"resolution_rule",
-                          {{"quantile", settings.resolution.quantile},
-                           {"samples_per_spacing", settings.resolution.samples_per_spacing},
-                           {"footprint", settings.resolution.footprint},
-                           {"min_resolution", settings.resolution.min_resolution},
-                           {"max_resolution", settings.resolution.max_resolution}}},
-                         {"plan", plan.to_json(cloud.world_offset)}};
+    manifest.bake = splat_settings_json(settings.bake);
+    manifest.bake.update(json{{"source", "point cloud"},
+                              {"resolution", "per probe (planned)"},
+                              {"points", cloud.size()},
+                              {"resolution_rule",
+                               {{"quantile", settings.resolution.quantile},
+                                {"samples_per_spacing", settings.resolution.samples_per_spacing},
+                                {"footprint", settings.resolution.footprint},
+                                {"min_resolution", settings.resolution.min_resolution},
+                                {"max_resolution", settings.resolution.max_resolution}}},
+                              {"plan", plan.to_json(cloud.world_offset)}});
     manifest.sources = sources;
     return write_probe_set(
         folder, std::move(manifest),

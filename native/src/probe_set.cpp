@@ -260,6 +260,14 @@ BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest
     return summary;
 }
 
+json splat_settings_json(const BakeSettings& settings) {
+    return json{{"splat_scale", settings.splat_scale},
+                {"splat_plane_reach", settings.splat_plane_reach},
+                {"max_splat_radius_texels", settings.max_splat_radius_texels},
+                {"hole_fill_texels", settings.hole_fill_texels},
+                {"min_distance", settings.min_distance}};
+}
+
 BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,
                                       const BakeSettings& settings,
                                       const LocalGeometryOptions& geometry_options,
@@ -278,16 +286,12 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
     ProbeSetManifest manifest;
     manifest.world_offset = cloud.world_offset;
     manifest.placement = placement;
-    manifest.bake = json{{"source", "point cloud"},
-                         {"resolution", settings.resolution},
-                         {"splat_scale", settings.splat_scale},
-                         {"max_splat_radius_texels", settings.max_splat_radius_texels},
-                         {"splat_plane_reach", settings.splat_plane_reach},
-                         {"hole_fill_texels", settings.hole_fill_texels},
-                         {"min_distance", settings.min_distance},
-                         {"normal_neighbours", geometry_options.normal_neighbours},
-                         {"spacing_neighbours", geometry_options.spacing_neighbours},
-                         {"points", cloud.size()}};
+    manifest.bake = splat_settings_json(settings);
+    manifest.bake.update(json{{"source", "point cloud"},
+                              {"resolution", settings.resolution},
+                              {"normal_neighbours", geometry_options.normal_neighbours},
+                              {"spacing_neighbours", geometry_options.spacing_neighbours},
+                              {"points", cloud.size()}});
     manifest.sources = sources;
     BakeSummary summary = write_probe_set(
         folder, std::move(manifest),

@@ -77,6 +77,10 @@ struct BakeSummary {
                                           const std::function<ProbeMap(std::size_t)>& bake_one,
                                           Progress* progress = nullptr);
 
+// The splat settings of a cloud bake as its manifest records them under "bake": one list for
+// every kind of cloud bake, so that a new setting is recorded by all of them.
+[[nodiscard]] nlohmann::json splat_settings_json(const BakeSettings& settings);
+
 // Bakes every probe of `placement` from `cloud` into `folder` (created when missing), one probe
 // at a time so memory stays at one probe's maps, and writes the manifest last. `sources` goes
 // into the manifest as given. On cancellation or error no partial probe file is left behind.
