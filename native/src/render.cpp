@@ -83,53 +83,83 @@ void set_from_eye_probe(FieldTraceResult& result, const ProbeTraceResult& r, int
     result.probes_tried = 1;
 }
 
-// Traces camera rays[0, count), count at most kRayBatch, into hits[0, count). From an eye at a
-// probe every ray is that probe's O(1) lookup, and only the rays it answers UNKNOWN go through
-// the whole field; every camera ray starts at the eye, so the lookup needs no walk set-up.
-void trace_camera_rays(const ProbeField& field, const EyeProbe& eye, const Ray* rays,
-                       std::size_t count, const FieldTraceSettings& settings,
-                       FieldTraceResult* hits) {
-    if (eye.index < 0) {
+// How a view's camera rays are traced, set up once per view: the trace mode resolved (a bad
+// request fails before any work) and the probe the eye sits at found. The image, the
+// throughput figure and its floor all trace through it, so they trace alike.
+class ViewTracer {
+public:
+    ViewTracer(const ProbeField& field, const Camera& camera, const RenderSettings& settings)
+        : field_(field), trace_(settings.trace),
+          eye_(field, camera.position() - field.world_offset(), settings.trace.probe) {
+        trace_.mode = field.resolve_mode(settings.trace);
+    }
+
+    // Traces camera rays[0, count), count at most kRayBatch, into hits[0, count). From an eye
+    // at a probe every ray is that probe's O(1) lookup, and only the rays it answers UNKNOWN go
+    // through the whole field; every camera ray starts at the eye, so the lookup needs no walk
+    // set-up.
+    void trace_batch(const Ray* rays, std::size_t count, FieldTraceResult* hits) const {
+        if (eye_.index < 0) {
+            for (std::size_t k = 0; k < count; ++k) {
+                hits[k] = field_.trace(rays[k], trace_);
+            }
+            return;
+        }
+        std::array<ProbeTraceResult, kRayBatch> answers;
+        eye_.lookup->lookup_batch(rays, count, answers.data());
         for (std::size_t k = 0; k < count; ++k) {
-            hits[k] = field.trace(rays[k], settings);
-        }
-        return;
-    }
-    std::array<ProbeTraceResult, kRayBatch> answers;
-    eye.lookup->lookup_batch(rays, count, answers.data());
-    for (std::size_t k = 0; k < count; ++k) {
-        if (answers[k].status == TraceStatus::Unknown) {
-            hits[k] = field.trace(rays[k], settings);
-        } else {
-            set_from_eye_probe(hits[k], answers[k], eye.index);
+            if (answers[k].status == TraceStatus::Unknown) {
+                hits[k] = field_.trace(rays[k], trace_);
+            } else {
+                set_from_eye_probe(hits[k], answers[k], eye_.index);
+            }
         }
     }
+
+    // Traces rays[0, count), any count, a batch at a time, calling each(k, answer of ray k).
+    template <class Each>
+    void trace(const Ray* rays, std::size_t count, Each&& each) const {
+        std::array<FieldTraceResult, kRayBatch> hits;
+        for (std::size_t first = 0; first < count; first += kRayBatch) {
+            const std::size_t size = std::min(kRayBatch, count - first);
+            trace_batch(rays + first, size, hits.data());
+            for (std::size_t k = 0; k < size; ++k) {
+                each(first + k, hits[k]);
+            }
+        }
+    }
+
+private:
+    const ProbeField& field_;
+    FieldTraceSettings trace_;
+    EyeProbe eye_;
+};
+
+// The camera's rays in the field's frame, each moved to start where its trace ended
+// (rays_started_at_answers).
+std::vector<Ray> rays_started_at_answers(const ViewTracer& tracer, const Camera& camera,
+                                         const glm::dvec3& offset) {
+    std::vector<Ray> rays = camera_local_rays(camera, offset);
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, rays.size(), kRayBatch),
+        [&](const tbb::blocked_range<std::size_t>& r) {
+            Ray* first = rays.data() + r.begin();
+            tracer.trace(first, r.size(), [&](std::size_t k, const FieldTraceResult& h) {
+                const double end = h.status == TraceStatus::Hit ? h.t : h.free_until;
+                if (h.status != TraceStatus::Miss && std::isfinite(end)) {
+                    first[k].t_min = std::max(first[k].t_min, end);
+                }
+            });
+        });
+    return rays;
 }
 
 } // namespace
 
 std::vector<Ray> rays_started_at_answers(const ProbeField& field, const Camera& camera,
                                          const RenderSettings& settings) {
-    FieldTraceSettings trace = settings.trace;
-    trace.mode = field.resolve_mode(settings.trace);
-    const glm::dvec3 offset = field.world_offset();
-    const EyeProbe eye(field, camera.position() - offset, trace.probe);
-    std::vector<Ray> rays = camera_local_rays(camera, offset);
-    const std::size_t batches = (rays.size() + kRayBatch - 1) / kRayBatch;
-    tbb::parallel_for(std::size_t{0}, batches, [&](std::size_t batch) {
-        Ray* first = rays.data() + batch * kRayBatch;
-        const std::size_t size = std::min(kRayBatch, rays.size() - batch * kRayBatch);
-        std::array<FieldTraceResult, kRayBatch> hits;
-        trace_camera_rays(field, eye, first, size, trace, hits.data());
-        for (std::size_t k = 0; k < size; ++k) {
-            const FieldTraceResult& h = hits[k];
-            const double end = h.status == TraceStatus::Hit ? h.t : h.free_until;
-            if (h.status != TraceStatus::Miss && std::isfinite(end)) {
-                first[k].t_min = std::max(first[k].t_min, end);
-            }
-        }
-    });
-    return rays;
+    return rays_started_at_answers(ViewTracer(field, camera, settings), camera,
+                                   field.world_offset());
 }
 
 ThroughputResult probe_trace_throughput(const ProbeField& field, const Camera& camera,
@@ -138,24 +168,17 @@ ThroughputResult probe_trace_throughput(const ProbeField& field, const Camera& c
     if (repeats < 1) {
         throw InputError("probe trace throughput: repeats must be at least 1");
     }
-    FieldTraceSettings trace = settings.trace;
-    trace.mode = field.resolve_mode(settings.trace);
+    const ViewTracer tracer(field, camera, settings);
     const glm::dvec3 offset = field.world_offset();
-    const EyeProbe eye(field, camera.position() - offset, trace.probe);
     const std::vector<Ray> rays = start == ThroughputStart::Answer
-                                      ? rays_started_at_answers(field, camera, settings)
+                                      ? rays_started_at_answers(tracer, camera, offset)
                                       : camera_local_rays(camera, offset);
     return measure_rays_throughput(
         rays, repeats, "probe trace", [&](const Ray* batch, std::size_t count) {
-            std::array<FieldTraceResult, kRayBatch> hits;
             std::uint64_t hit_count = 0;
-            for (std::size_t first = 0; first < count; first += kRayBatch) {
-                const std::size_t size = std::min(kRayBatch, count - first);
-                trace_camera_rays(field, eye, batch + first, size, trace, hits.data());
-                for (std::size_t k = 0; k < size; ++k) {
-                    hit_count += hits[k].status == TraceStatus::Hit ? 1 : 0;
-                }
-            }
+            tracer.trace(batch, count, [&](std::size_t, const FieldTraceResult& h) {
+                hit_count += h.status == TraceStatus::Hit ? 1 : 0;
+            });
             return hit_count;
         });
 }
@@ -166,9 +189,9 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
     if (settings.tile_size < 1) {
         throw InputError("render: tile_size must be at least 1");
     }
-    // Resolve the mode once, so that a bad request fails before any work.
-    FieldTraceSettings trace = settings.trace;
-    trace.mode = field.resolve_mode(settings.trace);
+    // An eye at a probe (DESIGN.md §4): every ray is one texel lookup in that probe; only rays
+    // it cannot answer (UNKNOWN texels) go through the whole field.
+    const ViewTracer tracer(field, camera, settings);
     RenderedImage image(camera.width, camera.height);
     // Probe traces per pixel, summed after the parallel loop (no shared counters).
     std::vector<std::uint32_t> probes_tried(image.pixel_count(), 0);
@@ -178,9 +201,6 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
     const auto start = std::chrono::steady_clock::now();
     const glm::dvec3 offset = field.world_offset();
     const std::size_t tile = static_cast<std::size_t>(settings.tile_size);
-    // An eye at a probe (DESIGN.md §4): every ray is one texel lookup in that probe; only rays
-    // it cannot answer (UNKNOWN texels) go through the whole field.
-    const EyeProbe eye(field, camera.position() - offset, trace.probe);
     const CameraRays camera_rays(camera);
     tbb::parallel_for(
         tbb::blocked_range2d<int>(0, camera.height, tile, 0, camera.width, tile),
@@ -198,7 +218,7 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
                         rays[static_cast<std::size_t>(k)] = camera_rays.local_pixel_ray(
                             x0 + k, y, offset, settings.sample_x, settings.sample_y);
                     }
-                    trace_camera_rays(field, eye, rays.data(), size, trace, hits.data());
+                    tracer.trace_batch(rays.data(), size, hits.data());
                     for (int k = 0; k < count; ++k) {
                         const FieldTraceResult& hit = hits[static_cast<std::size_t>(k)];
                         const std::size_t i = image.index(x0 + k, y);

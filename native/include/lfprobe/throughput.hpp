@@ -91,19 +91,4 @@ measure_batch_throughput(const Camera& camera, const glm::dvec3& world_offset, i
                                    std::forward<CountHits>(count_hits));
 }
 
-// The same for a tracer of one ray at a time: `is_hit(const Ray&) -> bool`.
-template <class IsHit>
-[[nodiscard]] ThroughputResult measure_throughput(const Camera& camera,
-                                                  const glm::dvec3& world_offset, int repeats,
-                                                  const std::string& who, IsHit&& is_hit) {
-    return measure_batch_throughput(camera, world_offset, repeats, who,
-                                    [&](const Ray* rays, std::size_t count) {
-                                        std::uint64_t hits = 0;
-                                        for (std::size_t i = 0; i < count; ++i) {
-                                            hits += is_hit(rays[i]) ? 1 : 0;
-                                        }
-                                        return hits;
-                                    });
-}
-
 } // namespace lfprobe
