@@ -59,6 +59,8 @@ PlanSettings plan_settings_from(const py::dict& options) {
             s.classify_resolution = v.cast<int>();
         } else if (key == "splat_scale") {
             s.bake.splat_scale = v.cast<float>();
+        } else if (key == "splat_plane_reach") {
+            s.bake.splat_plane_reach = v.cast<float>();
         } else if (key == "hole_fill_texels") {
             s.bake.hole_fill_texels = v.cast<int>();
         } else {
@@ -67,7 +69,7 @@ PlanSettings plan_settings_from(const py::dict& options) {
                 "' (expected auto_resolution, resolution, min_resolution, "
                 "max_resolution, footprint, quantile, samples_per_spacing, classify, clearance, "
                 "cell_reach, max_move, partly_unknown, min_coverage_gain, drop, "
-                "classify_resolution, splat_scale, "
+                "classify_resolution, splat_scale, splat_plane_reach, "
                 "hole_fill_texels)");
         }
     }

@@ -1,6 +1,7 @@
 """The Python face of the native core: arrays in and out, errors as exceptions, long work with
 the GIL released, progress and cancellation."""
 
+import json
 import threading
 import time
 
@@ -135,3 +136,21 @@ def test_bad_bake_arguments_are_value_errors(native, tmp_path):
     with pytest.raises(ValueError, match="counts"):
         native.bake_probe_set(cloud, str(tmp_path / "d"), resolution=16, grid_min=[0, 0, 0],
                               grid_max=[1, 1, 1], counts=[0, 1, 1])
+
+
+def test_plan_options_reach_the_splat_settings_of_the_planned_bake(native, tmp_path):
+    """A planned bake takes splat_plane_reach among its options, checks it as a plain bake does,
+    and records every splat setting in the manifest as a plain bake does."""
+    cloud = box_cloud(native)
+    probe = [[0.0, 0.0, 1.25]]
+    with pytest.raises(ValueError, match="splat_plane_reach must be a positive"):
+        native.start_plan_probes(cloud, positions=probe, options={"splat_plane_reach": 0.0}).run()
+    native.start_bake_planned_probe_set(cloud, str(tmp_path / "planned"), positions=probe,
+                                        options={"splat_plane_reach": 3.0}).run()
+    native.bake_probe_set(cloud, str(tmp_path / "plain"), resolution=64, positions=probe)
+    planned, plain = (json.loads((tmp_path / name / "manifest.json").read_text())["bake"]
+                      for name in ("planned", "plain"))
+    assert planned["splat_plane_reach"] == 3.0 and plain["splat_plane_reach"] == 2.0
+    splat_keys = {"splat_scale", "splat_plane_reach", "max_splat_radius_texels", "hole_fill_texels",
+                  "min_distance"}
+    assert splat_keys <= set(planned) and splat_keys <= set(plain)
