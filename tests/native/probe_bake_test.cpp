@@ -82,61 +82,6 @@ TEST(ProbeBake, BoxRoomDistancesMatchTheAnalyticScene) {
     }
 }
 
-TEST(ProbeBake, NothingBehindASurfaceShowsThroughIt) {
-    // A sparsely sampled near wall (5 cm pitch, 0.6 m from the probe) in front of a dense far
-    // wall (3 m): at 512² a texel is ~4 mm on the near wall, so without splats most texels
-    // between near points would see the far wall.
-    PointCloud cloud;
-    auto add_wall = [&](float x, float pitch, float half_extent) {
-        const int count = static_cast<int>(2.0f * half_extent / pitch) + 1;
-        for (int i = 0; i < count; ++i) {
-            for (int j = 0; j < count; ++j) {
-                cloud.positions.emplace_back(x, -half_extent + static_cast<float>(i) * pitch,
-                                             -half_extent + static_cast<float>(j) * pitch);
-                cloud.colors.emplace_back(x < 1.0f ? 1.0f : 0.0f, 0.0f, 0.0f);
-                cloud.scan_index.push_back(0);
-            }
-        }
-    };
-    add_wall(0.6f, 0.05f, 0.5f);
-    add_wall(3.0f, 0.01f, 3.0f);
-    cloud.scans.push_back(ScanSource{"two walls", cloud.positions.size(), glm::dvec3(0.0), true});
-    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
-
-    auto leak_fraction = [&](float splat_scale) {
-        BakeSettings settings;
-        settings.resolution = 512;
-        settings.splat_scale = splat_scale;
-        settings.hole_fill_texels = 0;
-        const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
-        std::size_t inside = 0;
-        std::size_t leaked = 0;
-        for (int y = 0; y < map.resolution; ++y) {
-            for (int x = 0; x < map.resolution; ++x) {
-                const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
-                if (d.x <= 0.0f) {
-                    continue;
-                }
-                const glm::vec3 on_plane = d * (0.6f / d.x);
-                // Well inside the near wall's extent.
-                if (std::abs(on_plane.y) > 0.45f || std::abs(on_plane.z) > 0.45f) {
-                    continue;
-                }
-                ++inside;
-                const float dist = map.distance[oct::texel_index({x, y}, map.resolution)];
-                leaked += !(dist < 1.0f) ? 1 : 0;
-            }
-        }
-        return static_cast<double>(leaked) / static_cast<double>(inside);
-    };
-    const double with_splats = leak_fraction(0.8f);
-    const double without = leak_fraction(0.0f);
-    std::printf("far wall seen through the near wall: %.4f with splats, %.4f without\n",
-                with_splats, without);
-    EXPECT_EQ(with_splats, 0.0);
-    EXPECT_GT(without, 0.5); // the paper's aliasing, reproduced without splats
-}
-
 namespace {
 
 // A wall of points on the plane x = `x` (normal along x), pitch `pitch_y` × `pitch_z`, seen by
@@ -154,7 +99,60 @@ void add_wall_x(PointCloud& cloud, float x, float pitch_y, float pitch_z, float 
     }
 }
 
+// The fraction of `map`'s texels, baked at `probe`, whose ray meets the plane x = probe.x +
+// `wall_distance` within `half_extent` of the x axis in y and z, for which `counts(distance)`
+// holds (the texel's stored distance).
+template <class Counts>
+double fraction_on_wall_x(const ProbeMap& map, const glm::vec3& probe, float wall_distance,
+                          float half_extent, Counts&& counts) {
+    std::size_t inside = 0;
+    std::size_t counted = 0;
+    for (int y = 0; y < map.resolution; ++y) {
+        for (int x = 0; x < map.resolution; ++x) {
+            const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
+            if (d.x <= 0.0f) {
+                continue;
+            }
+            const glm::vec3 on_plane = probe + d * (wall_distance / d.x);
+            if (std::abs(on_plane.y) > half_extent || std::abs(on_plane.z) > half_extent) {
+                continue;
+            }
+            ++inside;
+            counted += counts(map.distance[oct::texel_index({x, y}, map.resolution)]) ? 1 : 0;
+        }
+    }
+    return static_cast<double>(counted) / static_cast<double>(inside);
+}
+
 } // namespace
+
+TEST(ProbeBake, NothingBehindASurfaceShowsThroughIt) {
+    // A sparsely sampled near wall (5 cm pitch, 0.6 m from the probe) in front of a dense far
+    // wall (3 m): at 512² a texel is ~4 mm on the near wall, so without splats most texels
+    // between near points would see the far wall.
+    PointCloud cloud;
+    add_wall_x(cloud, 0.6f, 0.05f, 0.05f, 0.5f);
+    add_wall_x(cloud, 3.0f, 0.01f, 0.01f, 3.0f);
+    cloud.scans.push_back(ScanSource{"two walls", cloud.positions.size(), glm::dvec3(0.0), true});
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+
+    auto leak_fraction = [&](float splat_scale) {
+        BakeSettings settings;
+        settings.resolution = 512;
+        settings.splat_scale = splat_scale;
+        settings.hole_fill_texels = 0;
+        const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+        // Well inside the near wall's extent.
+        return fraction_on_wall_x(map, glm::vec3(0.0f), 0.6f, 0.45f,
+                                  [](float distance) { return !(distance < 1.0f); });
+    };
+    const double with_splats = leak_fraction(0.8f);
+    const double without = leak_fraction(0.0f);
+    std::printf("far wall seen through the near wall: %.4f with splats, %.4f without\n",
+                with_splats, without);
+    EXPECT_EQ(with_splats, 0.0);
+    EXPECT_GT(without, 0.5); // the paper's aliasing, reproduced without splats
+}
 
 TEST(ProbeBake, AWallBesideTheProbeHidesNothingPastItsPlane) {
     // The probe 1.5 cm in front of a wall (the hard scene's probe beside a pillar), a far wall
@@ -213,24 +211,8 @@ TEST(ProbeBake, ObliqueScanLinesLeaveNoHoles) {
         // height), where the splat cone is wide enough to span the gap between rows.
         const ProbeMap map =
             bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.6, 0.0, -1.5), settings);
-        std::size_t inside = 0;
-        std::size_t unknown = 0;
-        for (int y = 0; y < map.resolution; ++y) {
-            for (int x = 0; x < map.resolution; ++x) {
-                const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
-                if (d.x <= 0.0f) {
-                    continue;
-                }
-                const glm::vec3 on_plane = glm::vec3(0.6f, 0.0f, -1.5f) + d * (0.4f / d.x);
-                if (std::abs(on_plane.y) > 0.9f || std::abs(on_plane.z) > 0.9f) {
-                    continue;
-                }
-                ++inside;
-                unknown +=
-                    std::isnan(map.distance[oct::texel_index({x, y}, map.resolution)]) ? 1 : 0;
-            }
-        }
-        return static_cast<double>(unknown) / static_cast<double>(inside);
+        return fraction_on_wall_x(map, glm::vec3(0.6f, 0.0f, -1.5f), 0.4f, 0.9f,
+                                  [](float distance) { return std::isnan(distance); });
     };
     const double one = holes(1.0f);
     const double two = holes(2.0f);
