@@ -142,6 +142,13 @@ TEST(ProbePlan, MovesOrDropsWhatIsNotUseful) {
     EXPECT_EQ(bounded.probes[0].resolution, 8);
 }
 
+// The plan of one probe at `at` in the test scene.
+PlannedProbe plan_one(const glm::dvec3& at, const PlanSettings& settings) {
+    return plan_probes(scene().cloud, scene().geometry, ProbePlacement::from_positions({at}),
+                       settings)
+        .probes[0];
+}
+
 TEST(ProbePlan, AProbeBesideASurfaceStaysWhereItSeesEverything) {
     // 1.5 cm in front of the box's +x face (the hard scene's probe beside a pillar): too close,
     // but it sees the face and the room whole; a move would gain nothing, so it stays, kept.
@@ -149,9 +156,7 @@ TEST(ProbePlan, AProbeBesideASurfaceStaysWhereItSeesEverything) {
     PlanSettings settings;
     settings.auto_resolution = false;
     settings.fixed_resolution = 32;
-    const ProbePlan plan = plan_probes(scene().cloud, scene().geometry,
-                                       ProbePlacement::from_positions({at}), settings);
-    const PlannedProbe& p = plan.probes[0];
+    const PlannedProbe p = plan_one(at, settings);
     EXPECT_EQ(p.found, ProbeClass::TooClose);
     EXPECT_EQ(p.kind, ProbeClass::TooClose);
     EXPECT_LT(p.classification.unknown_fraction, settings.min_coverage_gain);
@@ -168,9 +173,7 @@ TEST(ProbePlan, AProbeOnAWallsPlaneMovesTowardWhatItSees) {
     PlanSettings settings;
     settings.auto_resolution = false;
     settings.max_move = 0.3;
-    const ProbePlan plan = plan_probes(scene().cloud, scene().geometry,
-                                       ProbePlacement::from_positions({at}), settings);
-    const PlannedProbe& p = plan.probes[0];
+    const PlannedProbe p = plan_one(at, settings);
     EXPECT_TRUE(p.moved);
     EXPECT_LT(p.position.x, 2.0);
     EXPECT_NEAR(p.position.y, at.y, 0.01);
