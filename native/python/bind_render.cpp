@@ -53,13 +53,23 @@ py::dict splat_stats_dict(const SplatStats& s, double geometry_seconds) {
     return d;
 }
 
+// The image's sampling and colour: samples per pixel, radiance filter, probes blended.
+struct Fidelity {
+    int spp = RenderSettings{}.samples_per_pixel;
+    std::string filter = radiance_filter_name(FieldTraceSettings{}.filter);
+    int blend = FieldTraceSettings{}.blend;
+};
+
 RenderSettings render_settings(const std::string& mode, double thickness, bool use_coarse_levels,
-                               int tile_size) {
+                               int tile_size, const Fidelity& fidelity = {}) {
     RenderSettings settings;
     settings.trace.mode = field_mode_from_name(mode);
     settings.trace.probe.thickness = thickness;
     settings.trace.probe.use_coarse_levels = use_coarse_levels;
     settings.tile_size = tile_size;
+    settings.samples_per_pixel = fidelity.spp;
+    settings.trace.filter = radiance_filter_from_name(fidelity.filter);
+    settings.trace.blend = fidelity.blend;
     return settings;
 }
 
@@ -155,10 +165,10 @@ void bind_render(py::module_& m) {
             "start_render",
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
                const std::string& mode, int threads, double thickness, bool use_coarse_levels,
-               int tile_size) {
+               int tile_size, int spp, const std::string& filter, int blend) {
                 const Camera cam = camera_from(camera);
-                const RenderSettings settings =
-                    render_settings(mode, thickness, use_coarse_levels, tile_size);
+                const RenderSettings settings = render_settings(mode, thickness, use_coarse_levels,
+                                                                tile_size, {spp, filter, blend});
                 using Result = std::pair<RenderedImage, RenderStats>;
                 return std::make_unique<Job>(
                     std::function<Result(Progress&)>([=](Progress& progress) {
@@ -176,7 +186,8 @@ void bind_render(py::module_& m) {
             },
             py::arg("camera"), py::arg("mode") = "auto", py::arg("threads") = 0,
             py::arg("thickness") = TraceSettings{}.thickness, py::arg("use_coarse_levels") = true,
-            py::arg("tile_size") = RenderSettings{}.tile_size,
+            py::arg("tile_size") = RenderSettings{}.tile_size, py::arg("spp") = Fidelity{}.spp,
+            py::arg("filter") = Fidelity{}.filter, py::arg("blend") = Fidelity{}.blend,
             "Start tracing a view in the background (the Blender engine's F12): a Job with "
             "progress in pixels, cancel(), and result() = (image dict, stats dict) as render() "
             "returns.")
@@ -184,10 +195,11 @@ void bind_render(py::module_& m) {
             "render",
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
                const std::string& output, const std::string& mode, int threads, double thickness,
-               bool use_coarse_levels, int tile_size) {
+               bool use_coarse_levels, int tile_size, int spp, const std::string& filter,
+               int blend) {
                 const Camera cam = camera_from(camera);
-                const RenderSettings settings =
-                    render_settings(mode, thickness, use_coarse_levels, tile_size);
+                const RenderSettings settings = render_settings(mode, thickness, use_coarse_levels,
+                                                                tile_size, {spp, filter, blend});
                 RenderStats stats;
                 RenderedImage image;
                 {
@@ -209,16 +221,24 @@ void bind_render(py::module_& m) {
             py::arg("camera"), py::arg("output") = "", py::arg("mode") = "auto",
             py::arg("threads") = 0, py::arg("thickness") = TraceSettings{}.thickness,
             py::arg("use_coarse_levels") = true, py::arg("tile_size") = RenderSettings{}.tile_size,
+            py::arg("spp") = Fidelity{}.spp, py::arg("filter") = Fidelity{}.filter,
+            py::arg("blend") = Fidelity{}.blend,
             "Trace a view (camera: a JSON path or text); returns (image dict, stats dict) and "
-            "writes the EXR when output is given. threads=0 uses every core.");
+            "writes the EXR when output is given. threads=0 uses every core. spp: samples per "
+            "pixel (1 or a square; colour and coverage averaged, the rest from the pixel "
+            "centre); filter: \"nearest\" or \"bilinear\" (a HIT's colour from its texel or "
+            "interpolated over the same surface); blend: probes a HIT's colour is blended from "
+            "(1: the answering probe alone).");
 
     m.def(
         "start_render",
         [](const std::string& folder, const std::string& camera, const std::string& output,
            const std::string& mode, int threads, double thickness, bool use_coarse_levels,
-           const py::object& storage, double distance_step) {
+           const py::object& storage, double distance_step, int spp, const std::string& filter,
+           int blend) {
             const Camera cam = camera_from(camera);
-            const RenderSettings settings = render_settings(mode, thickness, use_coarse_levels, 32);
+            const RenderSettings settings =
+                render_settings(mode, thickness, use_coarse_levels, 32, {spp, filter, blend});
             const std::optional<ProbeStorage> chosen = storage_from(storage, distance_step);
             return std::make_unique<Job>(
                 std::function<RenderStats(Progress&)>([=](Progress& progress) {
@@ -246,7 +266,8 @@ void bind_render(py::module_& m) {
         py::arg("folder"), py::arg("camera"), py::arg("output"), py::arg("mode") = "auto",
         py::arg("threads") = 0, py::arg("thickness") = TraceSettings{}.thickness,
         py::arg("use_coarse_levels") = true, py::arg("storage") = py::none(),
-        py::arg("distance_step") = 0.0,
+        py::arg("distance_step") = 0.0, py::arg("spp") = Fidelity{}.spp,
+        py::arg("filter") = Fidelity{}.filter, py::arg("blend") = Fidelity{}.blend,
         "Start rendering the probe set in `folder` from `camera` (JSON path or text) into the EXR "
         "`output`; the Job's result is the stats dict. storage as for ProbeField.load.");
 

@@ -484,4 +484,13 @@ Camera Camera::look_at(const glm::dvec3& eye, const glm::dvec3& target, int widt
     return c;
 }
 
+int samples_per_axis(int samples_per_pixel, const std::string& who) {
+    const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(samples_per_pixel))));
+    if (samples_per_pixel < 1 || n * n != samples_per_pixel) {
+        throw InputError(who + ": samples_per_pixel must be a square (1, 4, 9, 16, ...), got " +
+                         std::to_string(samples_per_pixel));
+    }
+    return n;
+}
+
 } // namespace lfprobe

@@ -23,27 +23,13 @@ nlohmann::json GroundTruthStats::to_json() const {
                           {"rays_per_second", rays_per_second()}};
 }
 
-namespace {
-
-int samples_per_axis(int samples_per_pixel) {
-    const int n = static_cast<int>(std::lround(std::sqrt(static_cast<double>(samples_per_pixel))));
-    if (samples_per_pixel < 1 || n * n != samples_per_pixel) {
-        throw InputError("ground truth: samples_per_pixel must be a square (1, 4, 9, 16, ...), "
-                         "got " +
-                         std::to_string(samples_per_pixel));
-    }
-    return n;
-}
-
-} // namespace
-
 RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera,
                                   const GroundTruthSettings& settings, Progress* progress,
                                   GroundTruthStats* stats) {
     if (settings.tile_size < 1) {
         throw InputError("ground truth: tile_size must be at least 1");
     }
-    const int n = samples_per_axis(settings.samples_per_pixel);
+    const int n = samples_per_axis(settings.samples_per_pixel, "ground truth");
     RenderedImage image(camera.width, camera.height);
     image.object.assign(image.pixel_count(), -1);
     if (progress != nullptr) {
@@ -79,8 +65,8 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
                         // Summed in a fixed order: the same floats for any thread count.
                         for (int sy = 0; sy < n; ++sy) {
                             for (int sx = 0; sx < n; ++sx) {
-                                const double ox = (sx + 0.5) / n;
-                                const double oy = (sy + 0.5) / n;
+                                const double ox = stratum_centre(sx, n);
+                                const double oy = stratum_centre(sy, n);
                                 const MeshHit h = scene.intersect(
                                     camera_rays.local_pixel_ray(x, y, offset, ox, oy));
                                 ++tile_rays;

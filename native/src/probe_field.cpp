@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/probe_blend.hpp"
 
 namespace lfprobe {
 
@@ -287,8 +288,11 @@ ProbeTraceResult ProbeField::trace_one(std::size_t probe, const Ray& ray,
 }
 
 FieldTraceResult ProbeField::trace(const Ray& ray, const FieldTraceSettings& settings) const {
-    return resolve_mode(settings) == FieldMode::Grid ? trace_grid(ray, settings)
-                                                     : trace_nearest(ray, settings);
+    FieldTraceResult result = resolve_mode(settings) == FieldMode::Grid
+                                  ? trace_grid(ray, settings)
+                                  : trace_nearest(ray, settings);
+    shade_hit(*this, ray, result, settings);
+    return result;
 }
 
 FieldTraceResult ProbeField::trace_nearest(const Ray& ray,

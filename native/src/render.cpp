@@ -12,6 +12,7 @@
 #include <tbb/partitioner.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/radiance_filter.hpp"
 
 namespace lfprobe {
 
@@ -36,6 +37,9 @@ nlohmann::json render_settings_json(const RenderSettings& settings) {
                           {"thickness_texels", p.thickness_texels},
                           {"use_coarse_levels", p.use_coarse_levels},
                           {"eye_at_probe_distance", p.eye_at_probe_distance},
+                          {"filter", radiance_filter_name(settings.trace.filter)},
+                          {"blend", settings.trace.blend},
+                          {"samples_per_pixel", settings.samples_per_pixel},
                           {"tile_size", settings.tile_size},
                           {"sample", {settings.sample_x, settings.sample_y}}};
 }
@@ -92,6 +96,10 @@ public:
         : field_(field), trace_(settings.trace),
           eye_(field, camera.position() - field.world_offset(), settings.trace.probe) {
         trace_.mode = field.resolve_mode(settings.trace);
+        if (settings.trace.blend < 1 || settings.trace.blend > 8) {
+            throw InputError("render: blend must be in [1, 8] probes, got " +
+                             std::to_string(settings.trace.blend));
+        }
     }
 
     // Traces camera rays[0, count), count at most kRayBatch, into hits[0, count). From an eye
@@ -112,6 +120,15 @@ public:
                 hits[k] = field_.trace(rays[k], trace_);
             } else {
                 set_from_eye_probe(hits[k], answers[k], eye_.index);
+                if (trace_.filter != RadianceFilter::Nearest &&
+                    answers[k].status == TraceStatus::Hit) {
+                    // The eye probe alone: from its centre no other probe adds detail.
+                    const ProbeMap& map = field_.probe(static_cast<std::size_t>(eye_.index));
+                    hits[k].radiance = filtered_radiance(
+                        map, rays[k].direction, answers[k].texel,
+                        surface_thickness(trace_.probe, answers[k].t, map.resolution),
+                        trace_.filter);
+                }
             }
         }
     }
@@ -183,12 +200,66 @@ ThroughputResult probe_trace_throughput(const ProbeField& field, const Camera& c
         });
 }
 
+namespace {
+
+// Writes a HIT's surface (depth, normal) and the pixel's status, probe and steps.
+void set_centre(RenderedImage& image, std::size_t i, const FieldTraceResult& hit) {
+    if (hit.status == TraceStatus::Hit) {
+        image.depth[i] = static_cast<float>(hit.t);
+        image.normal[3 * i] = hit.normal.x;
+        image.normal[3 * i + 1] = hit.normal.y;
+        image.normal[3 * i + 2] = hit.normal.z;
+    }
+    image.status[i] = static_cast<std::uint8_t>(hit.status);
+    image.probe[i] = hit.probe;
+    image.steps[i] = hit.steps;
+}
+
+void set_colour(RenderedImage& image, std::size_t i, const glm::vec3& colour, float coverage) {
+    image.rgba[4 * i] = colour.x;
+    image.rgba[4 * i + 1] = colour.y;
+    image.rgba[4 * i + 2] = colour.z;
+    image.rgba[4 * i + 3] = coverage;
+}
+
+// The mean colour of a pixel's samples, kept as differences from the first HIT so that a
+// surface of one colour gives exactly that colour, and the count of HITs.
+struct SampleMean {
+    glm::vec3 first{0.0f};
+    glm::vec3 sum{0.0f};
+    int hits = 0;
+
+    void add(const FieldTraceResult& h) {
+        if (h.status != TraceStatus::Hit) {
+            return;
+        }
+        if (hits == 0) {
+            first = h.radiance;
+        } else {
+            sum += h.radiance - first;
+        }
+        ++hits;
+    }
+    // Premultiplied by coverage, as the ground truth's colour is.
+    [[nodiscard]] glm::vec3 colour(int samples) const {
+        if (hits == 0) {
+            return glm::vec3{0.0f};
+        }
+        const glm::vec3 mean = first + sum / static_cast<float>(hits);
+        return hits == samples ? mean
+                               : mean * (static_cast<float>(hits) / static_cast<float>(samples));
+    }
+};
+
+} // namespace
+
 RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
                                 const RenderSettings& settings, Progress* progress,
                                 RenderStats* stats) {
     if (settings.tile_size < 1) {
         throw InputError("render: tile_size must be at least 1");
     }
+    const int n = samples_per_axis(settings.samples_per_pixel, "render");
     // An eye at a probe (DESIGN.md §4): every ray is one texel lookup in that probe; only rays
     // it cannot answer (UNKNOWN texels) go through the whole field.
     const ViewTracer tracer(field, camera, settings);
@@ -202,6 +273,10 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
     const glm::dvec3 offset = field.world_offset();
     const std::size_t tile = static_cast<std::size_t>(settings.tile_size);
     const CameraRays camera_rays(camera);
+    // With an odd n the middle stratum is the pixel centre: its ray is the centre's.
+    const int middle = n % 2 == 1 ? n / 2 : -1;
+    const bool centre_is_sample =
+        middle >= 0 && settings.sample_x == 0.5 && settings.sample_y == 0.5;
     tbb::parallel_for(
         tbb::blocked_range2d<int>(0, camera.height, tile, 0, camera.width, tile),
         [&](const tbb::blocked_range2d<int>& r) {
@@ -210,6 +285,7 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
             }
             std::array<Ray, kRayBatch> rays;
             std::array<FieldTraceResult, kRayBatch> hits;
+            std::vector<Ray> sample_rays;
             for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
                 for (int x0 = r.cols().begin(); x0 < r.cols().end();) {
                     const int count = std::min(static_cast<int>(kRayBatch), r.cols().end() - x0);
@@ -222,20 +298,60 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
                     for (int k = 0; k < count; ++k) {
                         const FieldTraceResult& hit = hits[static_cast<std::size_t>(k)];
                         const std::size_t i = image.index(x0 + k, y);
-                        if (hit.status == TraceStatus::Hit) {
-                            image.rgba[4 * i] = hit.radiance.x;
-                            image.rgba[4 * i + 1] = hit.radiance.y;
-                            image.rgba[4 * i + 2] = hit.radiance.z;
-                            image.rgba[4 * i + 3] = 1.0f;
-                            image.depth[i] = static_cast<float>(hit.t);
-                            image.normal[3 * i] = hit.normal.x;
-                            image.normal[3 * i + 1] = hit.normal.y;
-                            image.normal[3 * i + 2] = hit.normal.z;
-                        }
-                        image.status[i] = static_cast<std::uint8_t>(hit.status);
-                        image.probe[i] = hit.probe;
-                        image.steps[i] = hit.steps;
+                        set_centre(image, i, hit);
                         probes_tried[i] = hit.probes_tried;
+                        if (n == 1) {
+                            if (hit.status == TraceStatus::Hit) {
+                                set_colour(image, i, hit.radiance, 1.0f);
+                            }
+                            continue;
+                        }
+                        // The n×n strata of the pixel, in the ground truth's order.
+                        SampleMean mean;
+                        sample_rays.clear();
+                        for (int sy = 0; sy < n; ++sy) {
+                            for (int sx = 0; sx < n; ++sx) {
+                                if (centre_is_sample && sx == middle && sy == middle) {
+                                    sample_rays.push_back(Ray{}); // placeholder: the centre
+                                    continue;
+                                }
+                                sample_rays.push_back(camera_rays.local_pixel_ray(
+                                    x0 + k, y, offset, stratum_centre(sx, n),
+                                    stratum_centre(sy, n)));
+                            }
+                        }
+                        const std::size_t centre_slot =
+                            centre_is_sample ? static_cast<std::size_t>(middle * n + middle)
+                                             : sample_rays.size();
+                        std::uint32_t steps = hit.steps;
+                        std::uint32_t tried = hit.probes_tried;
+                        std::size_t slot = 0;
+                        auto each = [&](std::size_t, const FieldTraceResult& h) {
+                            if (slot == centre_slot) {
+                                mean.add(hit);
+                                ++slot;
+                            }
+                            mean.add(h);
+                            steps += h.steps;
+                            tried += h.probes_tried;
+                            ++slot;
+                        };
+                        if (centre_is_sample) {
+                            // Trace the strata before and after the centre, in order.
+                            tracer.trace(sample_rays.data(), centre_slot, each);
+                            tracer.trace(sample_rays.data() + centre_slot + 1,
+                                         sample_rays.size() - centre_slot - 1, each);
+                            if (slot == centre_slot) {
+                                mean.add(hit); // the centre was the last stratum
+                            }
+                        } else {
+                            tracer.trace(sample_rays.data(), sample_rays.size(), each);
+                        }
+                        const int samples = n * n;
+                        set_colour(image, i, mean.colour(samples),
+                                   static_cast<float>(mean.hits) / static_cast<float>(samples));
+                        image.steps[i] = steps;
+                        probes_tried[i] = tried;
                     }
                     x0 += count;
                 }
@@ -250,6 +366,9 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
     if (stats != nullptr) {
         *stats = stats_of(image);
         stats->seconds = seconds;
+        const std::uint64_t per_pixel =
+            static_cast<std::uint64_t>(n * n) + (n > 1 && !centre_is_sample ? 1 : 0);
+        stats->rays = image.pixel_count() * per_pixel;
         for (const std::uint32_t count : probes_tried) {
             stats->probes_tried += count;
         }

@@ -17,6 +17,7 @@
 #include "lfprobe/probe_bake.hpp"
 #include "lfprobe/probe_exr.hpp"
 #include "lfprobe/probe_set.hpp"
+#include "lfprobe/radiance_filter.hpp"
 #include "lfprobe/render.hpp"
 #include "trace_scenes.hpp"
 
@@ -296,7 +297,13 @@ TEST(Render, EyeAtAProbeIsOneLookupPerRay) {
                 EXPECT_EQ(image.status[i], static_cast<std::uint8_t>(lookup.status));
                 if (lookup.status == TraceStatus::Hit) {
                     EXPECT_EQ(image.depth[i], static_cast<float>(lookup.t));
-                    EXPECT_EQ(image.rgba[4 * i], lookup.radiance.x);
+                    // The colour: the lookup's texel read through the radiance filter.
+                    const glm::vec3 colour =
+                        filtered_radiance(field.probe(3), ray.direction, lookup.texel,
+                                          surface_thickness(settings.trace.probe, lookup.t,
+                                                            field.probe(3).resolution),
+                                          settings.trace.filter);
+                    EXPECT_EQ(image.rgba[4 * i], colour.x);
                 }
             }
         }

@@ -140,6 +140,15 @@ private:
     double clip_end_ = 0.0;
 };
 
+// The pixel sampling the ground truth and the probe render share: n×n samples per pixel at the
+// centres of an n×n grid of strata. samples_per_axis returns n for a perfect square
+// samples_per_pixel (1, 4, 9, ...), else InputError naming `who`.
+[[nodiscard]] int samples_per_axis(int samples_per_pixel, const std::string& who);
+// Where sample s (0 ≤ s < n) of an axis lies in the pixel, in pixels from its edge.
+[[nodiscard]] inline double stratum_centre(int s, int n) {
+    return (s + 0.5) / n;
+}
+
 // Reads a camera JSON file. Throws IoError when it cannot be read, InputError when it is not a
 // valid camera (the message names the file and the key).
 [[nodiscard]] Camera read_camera_json(const std::string& path);

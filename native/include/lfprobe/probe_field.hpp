@@ -24,6 +24,7 @@
 #include "lfprobe/probe_set.hpp"
 #include "lfprobe/probe_trace.hpp"
 #include "lfprobe/progress.hpp"
+#include "lfprobe/radiance_filter.hpp"
 #include "lfprobe/ray.hpp"
 
 namespace lfprobe {
@@ -42,6 +43,11 @@ struct FieldTraceSettings {
     TraceSettings probe;
     FieldMode mode = FieldMode::Auto;
     int max_probes = 8; // Nearest: how many of the nearest probes are tried
+    // How a HIT's colour is read from the probe that answered (radiance_filter.hpp).
+    RadianceFilter filter = RadianceFilter::Bilinear;
+    // How many probes a HIT's colour is blended from (probe_blend.hpp), the one that answered
+    // included, at most 8; 1: the answering probe alone, as the paper does.
+    int blend = 4;
 };
 
 struct FieldTraceResult {
@@ -91,7 +97,9 @@ public:
     // not a grid.
     [[nodiscard]] FieldMode resolve_mode(const FieldTraceSettings& settings) const;
 
-    // Traces a ray given in the set's local frame (world minus world_offset).
+    // Traces a ray given in the set's local frame (world minus world_offset); a HIT's colour is
+    // filtered and blended as the settings say (probe_blend.hpp). trace_nearest and trace_grid
+    // answer visibility only, with the colour of the texel met.
     [[nodiscard]] FieldTraceResult trace(const Ray& ray,
                                          const FieldTraceSettings& settings = {}) const;
     [[nodiscard]] FieldTraceResult trace_nearest(const Ray& ray,

@@ -23,9 +23,15 @@ struct RenderSettings {
     // Where in the pixel its ray passes, in pixels from the pixel's top-left corner.
     double sample_x = 0.5;
     double sample_y = 0.5;
+    // 1: one ray per pixel, at (sample_x, sample_y). A square n×n > 1: colour and coverage are
+    // the mean over the n×n stratified sample positions of the ground truth
+    // (ground_truth.hpp), while depth, normal, status and probe are the pixel centre's; the
+    // steps channel sums every ray of the pixel.
+    int samples_per_pixel = 1;
 };
 
-// Counts that do not depend on the clock (DESIGN.md §6), and the time it took.
+// Counts that do not depend on the clock (DESIGN.md §6), and the time it took. hits, misses and
+// unknown count pixels by their centre ray; rays and steps count every ray traced.
 struct RenderStats {
     std::uint64_t rays = 0;
     std::uint64_t hits = 0;
