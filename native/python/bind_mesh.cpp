@@ -346,9 +346,10 @@ void bind_mesh(py::module_& m) {
         py::arg("mesh"), py::arg("folder"), py::arg("resolution") = 512,
         py::arg("positions") = std::vector<std::vector<double>>{}, py::arg("grid_min") = py::none(),
         py::arg("grid_max") = py::none(), py::arg("counts") = py::none(),
-        py::arg("sources_json") = "[]", py::arg("supersample") = 1,
+        py::arg("sources_json") = "[]", py::arg("supersample") = MeshBakeSettings{}.supersample,
         "Start baking a probe set from a mesh (path or Mesh) with Embree; the Job's result is the "
-        "summary dict.");
+        "summary dict. supersample: n×n rays per texel for its colour, counting only those on the "
+        "centre ray's surface.");
 
     m.def(
         "start_simulate_scan",

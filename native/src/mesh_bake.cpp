@@ -1,6 +1,9 @@
 #include "lfprobe/mesh_bake.hpp"
 
+#include <cmath>
 #include <limits>
+
+#include <glm/geometric.hpp>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -23,6 +26,48 @@ void check_settings(const MeshBakeSettings& s) {
         throw InputError("mesh bake: supersample must be in [1, 16], got " +
                          std::to_string(s.supersample));
     }
+}
+
+// A texel's colour as the mean over an ss×ss stratified grid of rays across it, counting only
+// the rays that meet the centre ray's surface (within kSameSurface of its plane, facing the
+// same side): the texel's distance and normal are the centre's, so its colour must be that
+// surface's, never a mix with what lies behind a silhouette. Summed as differences from the
+// centre's colour, so that a surface of one colour stays exactly that colour.
+glm::vec3 texel_footprint_colour(const EmbreeScene& scene, const glm::dvec3& position,
+                                 oct::Texel texel, int n, int ss, const MeshHit& centre,
+                                 const glm::dvec3& normal) {
+    const double distance_scale = centre.t * 3.5449077018110318 / n; // the texel's footprint
+    const double same_surface = 1e-4 + 2.0 * distance_scale;
+    const glm::dvec3 centre_point =
+        position + centre.t * glm::dvec3(oct::texel_direction(texel, n));
+    glm::vec3 sum{0.0f};
+    int counted = 0;
+    for (int sy = 0; sy < ss; ++sy) {
+        for (int sx = 0; sx < ss; ++sx) {
+            const glm::vec2 uv{(static_cast<float>(texel.x) +
+                                (static_cast<float>(sx) + 0.5f) / static_cast<float>(ss)) /
+                                   static_cast<float>(n),
+                               (static_cast<float>(texel.y) +
+                                (static_cast<float>(sy) + 0.5f) / static_cast<float>(ss)) /
+                                   static_cast<float>(n)};
+            Ray sub;
+            sub.origin = position;
+            sub.direction = glm::dvec3(oct::decode(uv));
+            const MeshHit h = scene.intersect(sub);
+            if (!h.hit) {
+                continue;
+            }
+            const glm::dvec3 point = position + h.t * sub.direction;
+            const glm::dvec3 sub_normal(EmbreeScene::facing(h.shading_normal, sub.direction));
+            if (std::abs(glm::dot(normal, point - centre_point)) > same_surface ||
+                glm::dot(sub_normal, normal) <= 0.0) {
+                continue;
+            }
+            sum += h.base_color - centre.base_color;
+            ++counted;
+        }
+    }
+    return counted > 0 ? centre.base_color + sum / static_cast<float>(counted) : centre.base_color;
 }
 
 } // namespace
@@ -52,35 +97,12 @@ ProbeMap bake_probe_from_mesh(const EmbreeScene& scene, const glm::dvec3& positi
                     map.set_empty(i);
                     continue;
                 }
+                const glm::vec3 normal = EmbreeScene::facing(centre.shading_normal, ray.direction);
                 glm::vec3 colour = centre.base_color;
                 if (ss > 1) {
-                    glm::vec3 sum{0.0f};
-                    int hits = 0;
-                    for (int sy = 0; sy < ss; ++sy) {
-                        for (int sx = 0; sx < ss; ++sx) {
-                            const glm::vec2 uv{
-                                (static_cast<float>(x) +
-                                 (static_cast<float>(sx) + 0.5f) / static_cast<float>(ss)) /
-                                    static_cast<float>(n),
-                                (static_cast<float>(y) +
-                                 (static_cast<float>(sy) + 0.5f) / static_cast<float>(ss)) /
-                                    static_cast<float>(n)};
-                            Ray sub = ray;
-                            sub.direction = glm::dvec3(oct::decode(uv));
-                            const MeshHit h = scene.intersect(sub);
-                            if (h.hit) {
-                                sum += h.base_color;
-                                ++hits;
-                            }
-                        }
-                    }
-                    // The centre ray hit, so at least one sample did (odd ss) or nearly so;
-                    // keep the centre colour when every sample slipped past an edge.
-                    if (hits > 0) {
-                        colour = sum / static_cast<float>(hits);
-                    }
+                    colour = texel_footprint_colour(scene, position, texel, n, ss, centre,
+                                                    glm::dvec3(normal));
                 }
-                const glm::vec3 normal = EmbreeScene::facing(centre.shading_normal, ray.direction);
                 map.set_surface(i, static_cast<float>(centre.t), colour, normal, 1.0f);
             }
             if (progress != nullptr) {

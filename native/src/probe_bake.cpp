@@ -1,6 +1,7 @@
 #include "lfprobe/probe_bake.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <bit>
 #include <cmath>
@@ -121,6 +122,58 @@ void keep_smaller(std::uint64_t& slot, std::uint64_t value) {
     }
 }
 
+// The angular size of a texel of an N×N octahedral map is about sqrt(4π)/N (4π sr over N²).
+constexpr float kTexelAngleTimesN = 3.5449077f;
+
+// How much of a texel a point's colour stands for: 1 at the texel's centre, falling to 0 at the
+// edge of a disc of the texel's half angle or the point's splat angle, whichever is larger (a
+// cloud denser than the texels averages the points in each texel; a sparser one blends the
+// nearest points' splats). off_centre is 1 - cos of the angle from the texel's centre.
+float texel_colour_weight(float off_centre, float half_texel_angle, float splat_angle) {
+    const float radius = std::max(half_texel_angle, splat_angle);
+    const float angle2 = 2.0f * off_centre; // 1 - cos θ ≈ θ² / 2
+    return std::max(0.0f, 1.0f - angle2 / (radius * radius));
+}
+
+// A weighted sum of colours in fixed point, added with atomics: integer sums do not depend on
+// the order of the additions, so the mean is the same for any thread count.
+struct ColourSum {
+    static constexpr float kWeightScale = 4096.0f;  // 12 fractional bits of weight
+    static constexpr float kColourScale = 65536.0f; // 16 fractional bits of colour
+    std::uint64_t weight = 0;
+    std::array<std::uint64_t, 3> rgb{};
+
+    void add(const glm::vec3& colour, float w) {
+        const auto qw = static_cast<std::uint64_t>(std::lround(w * kWeightScale));
+        if (qw == 0) {
+            return;
+        }
+        std::atomic_ref<std::uint64_t>(weight).fetch_add(qw, std::memory_order_relaxed);
+        for (int c = 0; c < 3; ++c) {
+            // Colours are non-negative (the readers clamp); larger than 2^16 they saturate.
+            std::atomic_ref<std::uint64_t>(rgb[static_cast<std::size_t>(c)])
+                .fetch_add(quantised(colour[c]) * qw, std::memory_order_relaxed);
+        }
+    }
+    static std::uint64_t quantised(float colour) {
+        return static_cast<std::uint64_t>(
+            std::lround(std::clamp(colour, 0.0f, 65535.0f) * kColourScale));
+    }
+    // The mean, or `fallback` (one of the colours added) when nothing was added or every colour
+    // added was the fallback's: a surface of one colour keeps exactly that colour.
+    [[nodiscard]] glm::vec3 mean(const glm::vec3& fallback) const {
+        if (weight == 0 ||
+            (rgb[0] == quantised(fallback.x) * weight && rgb[1] == quantised(fallback.y) * weight &&
+             rgb[2] == quantised(fallback.z) * weight)) {
+            return fallback;
+        }
+        const double scale = 1.0 / (static_cast<double>(weight) * kColourScale);
+        return {static_cast<float>(static_cast<double>(rgb[0]) * scale),
+                static_cast<float>(static_cast<double>(rgb[1]) * scale),
+                static_cast<float>(static_cast<double>(rgb[2]) * scale)};
+    }
+};
+
 // Non-negative floats order like their bit patterns.
 std::uint32_t ordered_bits(float non_negative) {
     return std::bit_cast<std::uint32_t>(non_negative);
@@ -229,6 +282,16 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
                           });
     };
 
+    // Intensity-only clouds are shown grey-scale over the cloud's intensity range.
+    float intensity_min = 0.0f;
+    float intensity_scale = 0.0f;
+    if (!cloud.has_colors() && !cloud.intensities.empty()) {
+        const auto [lo, hi] =
+            std::minmax_element(cloud.intensities.begin(), cloud.intensities.end());
+        intensity_min = *lo;
+        intensity_scale = *hi > *lo ? 1.0f / (*hi - *lo) : 0.0f;
+    }
+
     // Pass 1: the nearest surface depth per texel.
     std::vector<std::uint32_t> front(texels, ordered_bits(kEmptyDistance));
     over_points("splatting points: depth", [&](std::size_t i) {
@@ -236,12 +299,30 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
             keep_smaller(front[t], ordered_bits(surfel_depth(p, hit)));
         });
     });
-    // Pass 2: among the points on that front surface (within a surface thickness of about the
-    // point spacing), the one whose direction is closest to the texel's centre gives the texel
-    // its colour and normal, so texels stay sharp instead of taking any point of the footprint.
+    // Pass 2: the points on that front surface (within a surface thickness of about the point
+    // spacing). The one whose direction is closest to the texel's centre gives the texel its
+    // normal (and, through its plane, its depth); the colour is the mean of all of them,
+    // weighted by how much of the texel each covers (texel_colour_weight): a texel's radiance
+    // is the average of what it covers, not one sample. Sums are integers, so the colour is
+    // the same for any thread count and any order of the points.
+    const float half_texel_angle = 0.5f * kTexelAngleTimesN / static_cast<float>(n);
     std::vector<std::uint64_t> winner(texels, kNoPoint);
+    std::vector<ColourSum> colour_sums(texels);
+    const auto colour_of = [&](std::size_t i) {
+        if (cloud.has_colors()) {
+            return cloud.colors[i];
+        }
+        if (!cloud.intensities.empty()) {
+            return glm::vec3((cloud.intensities[i] - intensity_min) * intensity_scale);
+        }
+        return glm::vec3(0.5f);
+    };
     over_points("splatting points: colour", [&](std::size_t i) {
         const float thickness = geometry.spacing[i];
+        const float splat_angle =
+            std::atan2(settings.splat_scale * geometry.spacing[i],
+                       glm::length(glm::vec3(glm::dvec3(cloud.positions[i]) - centre)));
+        const glm::vec3 rgb = colour_of(i);
         for_each_splat_texel(i, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
             const float depth = surfel_depth(p, hit);
             const float nearest = std::bit_cast<float>(front[t]);
@@ -251,29 +332,17 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
             const float off_centre = std::max(0.0f, 1.0f - glm::dot(directions[t], p.dir));
             keep_smaller(winner[t], (static_cast<std::uint64_t>(ordered_bits(off_centre)) << 32) |
                                         static_cast<std::uint32_t>(i));
+            colour_sums[t].add(rgb, texel_colour_weight(off_centre, half_texel_angle, splat_angle));
         });
     });
 
-    // Resolve the winning point of every texel into the maps.
-    float intensity_min = 0.0f;
-    float intensity_scale = 0.0f;
-    if (!cloud.has_colors() && !cloud.intensities.empty()) {
-        const auto [lo, hi] =
-            std::minmax_element(cloud.intensities.begin(), cloud.intensities.end());
-        intensity_min = *lo;
-        intensity_scale = *hi > *lo ? 1.0f / (*hi - *lo) : 0.0f;
-    }
+    // Resolve every texel's winning point and colour into the maps.
     tbb::parallel_for(std::size_t{0}, texels, [&](std::size_t t) {
         if (winner[t] == kNoPoint) {
             return;
         }
         const std::size_t i = static_cast<std::uint32_t>(winner[t] & 0xffffffffu);
-        glm::vec3 rgb(0.5f);
-        if (cloud.has_colors()) {
-            rgb = cloud.colors[i];
-        } else if (!cloud.intensities.empty()) {
-            rgb = glm::vec3((cloud.intensities[i] - intensity_min) * intensity_scale);
-        }
+        const glm::vec3 rgb = colour_sums[t].mean(colour_of(i));
         Surfel p;
         (void)surfel_of(i, p); // a winner was splatted, so it has a direction
         map.set_surface(t, surfel_depth(p, plane_hit(p, directions[t])), rgb, p.normal, 1.0f);

@@ -6,7 +6,10 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <Imath/half.h>
+
 #include "lfprobe/mesh_bake.hpp"
+#include "lfprobe/octahedral.hpp"
 
 namespace lfprobe {
 namespace {
@@ -97,6 +100,54 @@ TEST(MeshBake, ProbeSetOnDisk) {
     EXPECT_THROW((void)bake_probe_set_from_mesh(scene, placement, MeshBakeSettings{32, 1}, folder,
                                                 nlohmann::json::array(), &cancelled),
                  Cancelled);
+}
+
+// A red plate (x = 1, |y|, |z| < 0.3) in front of a blue wall (x = 3).
+Mesh plate_before_wall() {
+    Mesh m;
+    m.vertices = {{1, -0.3f, -0.3f}, {1, 0.3f, -0.3f}, {1, 0.3f, 0.3f}, {1, -0.3f, 0.3f},
+                  {3, -5, -5},       {3, 5, -5},       {3, 5, 5},       {3, -5, 5}};
+    m.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 6}, {4, 6, 7}};
+    m.materials.push_back(Material{"red", glm::vec3(0.8f, 0.1f, 0.1f), nullptr});
+    m.materials.push_back(Material{"blue", glm::vec3(0.1f, 0.2f, 0.9f), nullptr});
+    m.object_names = {"plate", "wall"};
+    m.material = {0, 0, 1, 1};
+    m.object = {0, 0, 1, 1};
+    return m;
+}
+
+TEST(MeshBake, SupersampledTexelsAcrossASilhouetteKeepTheirCentresSurfaceColour) {
+    // A texel is the centre ray's surface: its colour averages only the rays that meet that
+    // surface, so the plate's edge texels stay red and the wall's stay blue.
+    const Mesh mesh = plate_before_wall();
+    const EmbreeScene scene(mesh);
+    const int n = 48;
+    const ProbeMap map = bake_probe_from_mesh(scene, {0, 0.05, 0.02}, MeshBakeSettings{n, 4});
+    const glm::vec3 red(Imath::half(0.8f), Imath::half(0.1f), Imath::half(0.1f));
+    const glm::vec3 blue(Imath::half(0.1f), Imath::half(0.2f), Imath::half(0.9f));
+    int plate = 0;
+    int wall_beside_plate = 0;
+    for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+            const std::size_t i = oct::texel_index({x, y}, n);
+            const float r = map.distance[i];
+            if (!std::isfinite(r)) {
+                continue;
+            }
+            const glm::vec3 d = oct::texel_direction({x, y}, n);
+            const bool on_plate = std::abs(r * d.x - 1.0f) < 1e-3f;
+            EXPECT_EQ(map.radiance_at(i), on_plate ? red : blue) << x << ", " << y;
+            plate += on_plate ? 1 : 0;
+            // A wall texel whose neighbour is on the plate straddles the silhouette.
+            if (!on_plate && x + 1 < n) {
+                const float rn = map.distance[oct::texel_index({x + 1, y}, n)];
+                const glm::vec3 dn = oct::texel_direction({x + 1, y}, n);
+                wall_beside_plate += std::abs(rn * dn.x - 1.0f) < 1e-3f ? 1 : 0;
+            }
+        }
+    }
+    EXPECT_GT(plate, 20);
+    EXPECT_GT(wall_beside_plate, 4);
 }
 
 } // namespace

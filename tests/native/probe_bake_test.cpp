@@ -3,6 +3,7 @@
 #include <cmath>
 #include <vector>
 
+#include <Imath/half.h>
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
@@ -362,4 +363,61 @@ TEST(LocalGeometry, SmallestEigenvectorOfKnownMatrices) {
     const double plane[3][3] = {{1, 0, 1}, {0, 2, 0}, {1, 0, 1}};
     const glm::vec3 n = smallest_eigenvector(plane);
     EXPECT_NEAR(std::abs(glm::dot(n, glm::normalize(glm::vec3(1, 0, -1)))), 1.0f, 1e-6f);
+}
+
+TEST(ProbeBake, ATexelsColourIsTheMeanOfTheFrontSurfacesPointsItCovers) {
+    // A dense near wall (2 mm pitch, 1 m away: ~15 points across a 64² texel) of alternating
+    // colours in front of a far wall of a third colour. Each near texel takes the mean of the
+    // near points it covers (not the one nearest its centre, not the far wall's); a wall of one
+    // colour keeps exactly that colour.
+    PointCloud cloud;
+    add_wall_x(cloud, 1.0f, 0.002f, 0.002f, 0.2f);
+    const std::size_t near_points = cloud.positions.size();
+    for (std::size_t i = 0; i < near_points; ++i) {
+        const glm::vec3 p(cloud.positions[i]);
+        const int column = static_cast<int>(std::lround((p.y + 0.2f) / 0.002f));
+        cloud.colors[i] =
+            column % 2 == 0 ? glm::vec3(0.9f, 0.1f, 0.3f) : glm::vec3(0.1f, 0.5f, 0.3f);
+    }
+    add_wall_x(cloud, 3.0f, 0.01f, 0.01f, 2.0f);
+    for (std::size_t i = near_points; i < cloud.positions.size(); ++i) {
+        cloud.colors[i] = glm::vec3(0.0f, 0.0f, 1.0f);
+    }
+    cloud.scans.push_back(ScanSource{"two walls", cloud.positions.size(), glm::dvec3(0.0), true});
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    BakeSettings settings;
+    settings.resolution = 64;
+    const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+    int near_texels = 0;
+    for (int y = 0; y < map.resolution; ++y) {
+        for (int x = 0; x < map.resolution; ++x) {
+            const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
+            if (d.x <= 0.0f) {
+                continue;
+            }
+            const glm::vec3 on_near = d / d.x;
+            if (std::abs(on_near.y) > 0.15f || std::abs(on_near.z) > 0.15f) {
+                continue; // near the near wall's edge the footprint is partial
+            }
+            const std::size_t i = oct::texel_index({x, y}, map.resolution);
+            const glm::vec3 c = map.radiance_at(i);
+            EXPECT_NEAR(c.x, 0.5f, 0.06f) << x << ", " << y;
+            EXPECT_NEAR(c.y, 0.3f, 0.03f);
+            EXPECT_NEAR(c.z, 0.3f, 1e-3f); // both near colours have blue 0.3, the far wall 1
+            ++near_texels;
+        }
+    }
+    EXPECT_GT(near_texels, 10);
+
+    // One colour everywhere: exactly that colour, whatever the weights.
+    for (glm::vec3& c : cloud.colors) {
+        c = glm::vec3(0.3f, 0.55f, 0.8f);
+    }
+    const ProbeMap one = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+    const glm::vec3 expected(Imath::half(0.3f), Imath::half(0.55f), Imath::half(0.8f));
+    for (std::size_t i = 0; i < one.texel_count(); ++i) {
+        if (one.state(i) == TexelState::Surface) {
+            ASSERT_EQ(one.radiance_at(i), expected) << i;
+        }
+    }
 }

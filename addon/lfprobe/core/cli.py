@@ -52,7 +52,8 @@ def _cmd_bake(args) -> int:
     options.distance_step = args.distance_step
     progress = None if args.quiet else TerminalProgress()
     if args.mesh:
-        options.extra["supersample"] = args.supersample
+        if args.supersample is not None:
+            options.extra["supersample"] = args.supersample
         summary = cli_mesh.bake_from_mesh(args.mesh, args.out, placement, options, progress)
         summary.setdefault("points", 0)
         return _print_bake_summary(args, summary, f"{args.mesh[0]}")
@@ -143,21 +144,42 @@ def _cmd_info(args) -> int:
     return 0 if not info["missing_files"] else 1
 
 
+def fidelity_options(args) -> dict:
+    """The image options given on the command line (--spp, --filter, --blend); those left out
+    keep the native renderer's defaults."""
+    return {key: value for key, value in (("spp", args.spp), ("filter", args.filter), ("blend", args.blend))
+            if value is not None}
+
+
+def add_fidelity_arguments(parser) -> None:
+    parser.add_argument("--spp", type=int, default=None, metavar="N",
+                        help="samples per pixel: 1 (default) or a square (4, 9, 16, ...), the ground "
+                             "truth's stratified pattern; colour and coverage are averaged, depth, status, "
+                             "probe from the pixel centre, steps summed over the pixel's rays")
+    parser.add_argument("--filter", choices=["nearest", "bilinear"], default=None,
+                        help="a HIT's colour: its texel (nearest) or interpolated between the texels "
+                             "around it on the same surface (bilinear, default)")
+    parser.add_argument("--blend", type=int, default=None, metavar="N",
+                        help="probes a HIT's colour is blended from, weighted by how finely each sees the "
+                             "point (1: the first probe that answers, as the paper; default 4; at most 8)")
+
+
 def _cmd_render(args) -> int:
     _native = native.load()
     job = _native.start_render(args.probes, args.camera, args.out, mode=args.mode,
                                threads=args.threads, thickness=args.thickness,
                                storage=None if args.storage == "manifest" else args.storage,
-                               distance_step=args.distance_step)
+                               distance_step=args.distance_step, **fidelity_options(args))
     stats = job.run(None if args.quiet else TerminalProgress())
     if args.json:
         print(json.dumps(stats, indent=2))
         return 0
     rays = stats["rays"]
+    pixels = max(stats["hits"] + stats["misses"] + stats["unknown"], 1)
     print(f"rendered {args.out}: {rays:,} rays in {stats['seconds'] * 1000:.1f} ms, "
           f"{stats['rays_per_second'] / 1e6:.2f} M rays/s")
-    print(f"  HIT {100 * stats['hits'] / rays:.2f}%, MISS {100 * stats['misses'] / rays:.2f}%, "
-          f"UNKNOWN {100 * stats['unknown'] / rays:.2f}%; {stats['mean_steps']:.1f} texels and "
+    print(f"  pixels HIT {100 * stats['hits'] / pixels:.2f}%, MISS {100 * stats['misses'] / pixels:.2f}%, "
+          f"UNKNOWN {100 * stats['unknown'] / pixels:.2f}%; {stats['mean_steps']:.1f} texels and "
           f"{stats['mean_probes']:.2f} probes per ray")
     return 0
 
@@ -214,8 +236,9 @@ def build_parser() -> argparse.ArgumentParser:
     source.add_argument("--scan", nargs="+", metavar="FILE", help=".xyz/.txt/.pts/.ply scans, merged")
     source.add_argument("--mesh", nargs="+", metavar="FILE",
                         help="an .obj (+.mtl) or .ply mesh, baked with Embree (exact distances)")
-    bake.add_argument("--supersample", type=int, default=1,
-                      help="--mesh: n×n rays per texel for the colour")
+    bake.add_argument("--supersample", type=int, default=None, metavar="N",
+                      help="--mesh: n×n rays per texel for its colour, counting only those that meet "
+                           "the centre ray's surface (default 4; 1: the centre ray alone)")
     bake.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X",
                       help="scanner positions X Y Z, one per scan file (world coordinates)")
     bake.add_argument("--probe", nargs="+", type=float, action="append", metavar="X",
@@ -260,6 +283,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="auto: grid walk for grid sets, else nearest probes first")
     render.add_argument("--threads", type=int, default=0, help="cores to use (0: all); same image")
     render.add_argument("--thickness", type=float, default=0.02, help="surface thickness (m)")
+    add_fidelity_arguments(render)
     render.add_argument("--json", action="store_true", help="print the stats as JSON")
     render.add_argument("--quiet", action="store_true")
     cli_storage.add_storage_arguments(render, ["manifest", "full", "compact"], "manifest",

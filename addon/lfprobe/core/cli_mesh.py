@@ -34,7 +34,7 @@ def bake_from_mesh(
 ):
     """Mesh file → probe set folder, baked with Embree (exact distances, normals, base colour).
     One mesh file is supported per bake. options.extra may hold "supersample" (n×n rays per
-    texel for the colour). Returns the summary dict, or the running Job with start_only."""
+    texel for the colour; left out: the native default). Returns the summary dict, or the running Job with start_only."""
     if len(mesh_paths) != 1:
         raise ValueError(f"bake --mesh takes one mesh file, got {len(mesh_paths)}")
     placement.validate()
@@ -47,7 +47,7 @@ def bake_from_mesh(
         resolution=int(options.resolution),
         **placement.native_kwargs(),
         sources_json=json.dumps(sources),
-        supersample=int(options.extra.get("supersample", 1)),
+        **({"supersample": int(options.extra["supersample"])} if options.extra.get("supersample") else {}),
     )
     if start_only:
         return job

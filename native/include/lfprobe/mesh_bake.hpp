@@ -18,11 +18,12 @@ namespace lfprobe {
 
 struct MeshBakeSettings {
     int resolution = 512;
-    // 1: the texel-centre ray only. n > 1: the colour is the mean over the hits of an n×n
-    // stratified grid of rays across the texel (anti-aliased texture detail), while the
-    // distance, normal and the surface/empty decision stay those of the centre ray, the
-    // direction every consumer of the map assumes for the texel.
-    int supersample = 1;
+    // 1: the texel-centre ray only. n > 1: the colour is the mean over an n×n stratified grid
+    // of rays across the texel (the texel's radiance prefiltered over its footprint), counting
+    // only the rays that meet the centre ray's surface, while the distance, normal and the
+    // surface/empty decision stay those of the centre ray, the direction every consumer of the
+    // map assumes for the texel.
+    int supersample = 4;
 };
 
 // One probe at `position` (the mesh's local frame). Normals are the shading normal (vn) where
