@@ -51,10 +51,10 @@ def test_page_is_self_contained_and_has_every_section(tiny_report):
 def test_sweep_rows_carry_speed_error_memory_and_bake_time(tiny_report):
     out, data, _ = tiny_report
     rows = data["sweep"]
-    # 2 scan densities × 2 resolutions × 2 bake variants + 2 mesh resolutions, one more trace
-    # setting on the reference probe set, and compact storage on both resolutions of the
-    # densest splat + fill bake
-    assert len(rows) == 2 * 2 * 2 + 2 + 1 + 2
+    # 2 scan densities × 2 resolutions × 2 bake variants + 2 mesh resolutions, two more trace
+    # settings on the reference probe set (no coarse levels; the paper's first hit, nearest
+    # texel), and compact storage on both resolutions of the densest splat + fill bake
+    assert len(rows) == 2 * 2 * 2 + 2 + 2 + 2
     assert sum(r["storage"] == "compact" for r in rows) == 2
     for row in rows:
         assert row["ms_per_frame"] > 0 and row["rays_per_second"] > 0
@@ -204,11 +204,13 @@ def test_planning_section_compares_auto_adaptive_and_bytes_per_probe(tiny_report
 
 def test_findings_quote_the_measured_figures(tiny_report):
     _, data, result = tiny_report
-    first = sorted((r for r in data["at_probe"] if r["view"] == data["at_probe"][0]["view"]),
+    first = sorted((r for r in data["at_probe"]
+                    if r["view"] == data["at_probe"][0]["view"] and r["filter"] == "bilinear"),
                    key=lambda r: r["resolution"])
     sentence = data["findings"]["at_probe"][0]
-    assert f"{first[0]['psnr_vs_pixel_centre_gt']:.2f} dB" in sentence
-    assert f"{first[-1]['psnr_vs_pixel_centre_gt']:.2f} dB" in sentence
+    assert f"{first[0]['psnr']:.2f} dB" in sentence
+    assert f"{first[-1]['psnr']:.2f} dB" in sentence
+    assert f"{first[-1]['psnr_vs_converged_gt']:.2f} dB" in sentence
     assert sentence in result.stdout
 
 

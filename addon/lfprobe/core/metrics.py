@@ -22,6 +22,9 @@ SSIM_SIGMA = 1.5
 SSIM_WINDOW = 11  # 2·int(3.5·σ + 0.5) + 1: the Gaussian truncated at 3.5σ, as scikit-image does
 SSIM_K1, SSIM_K2 = 0.01, 0.03
 
+# Depth off by more than this fraction: the pixel shows another surface than the reference's.
+WRONG_SURFACE_RELATIVE = 0.05
+
 DEFINITIONS = {
     "colour": "RGB of each image with every pixel whose status is not HIT set to black, clamped to "
               "[0,1] and sRGB-encoded; data range 1",
@@ -40,6 +43,12 @@ DEFINITIONS = {
     "false_miss_rate": "pixels the test calls MISS where the ground truth hits / pixels the ground "
                        "truth hits; 0 when it hits none (a subset of the holes)",
     "unknown_rate": "pixels the test calls UNKNOWN / all pixels",
+    "psnr_answered": "PSNR as psnr over the pixels the test answered (status HIT or MISS): the error of "
+                     "what the probes show, apart from what they honestly call UNKNOWN (unknown_rate); "
+                     "null when the test answered no pixel",
+    "wrong_surface_rate": "pixels both images hit whose test depth differs from the reference depth by more "
+                          f"than {WRONG_SURFACE_RELATIVE:.0%} of it (another surface shown) / pixels both hit; "
+                          "0 when there are none",
     "counts": "confusion counts: ground truth (hit, miss) × test (HIT, MISS, UNKNOWN); reference "
               "pixels that are themselves UNKNOWN are left out and counted in ref_unknown",
 }
@@ -174,6 +183,25 @@ def confusion(ref_status: np.ndarray, test_status: np.ndarray) -> Dict[str, obje
     }
 
 
+def psnr_over(ref_rgb: np.ndarray, test_rgb: np.ndarray, mask: np.ndarray) -> Optional[float]:
+    """PSNR as psnr() over the pixels where `mask` is true; None when it selects none."""
+    mask = np.asarray(mask, dtype=bool)
+    if not mask.any():
+        return None
+    return psnr(np.asarray(ref_rgb)[mask], np.asarray(test_rgb)[mask])
+
+
+def wrong_surface_rate(ref_depth: np.ndarray, test_depth: np.ndarray, ref_hit: np.ndarray,
+                       test_hit: np.ndarray) -> float:
+    """Of the pixels both images hit with finite positive depth, the fraction whose test depth is
+    off by more than WRONG_SURFACE_RELATIVE of the reference's."""
+    ref_d, test_d = np.asarray(ref_depth, np.float64), np.asarray(test_depth, np.float64)
+    both = np.asarray(ref_hit) & np.asarray(test_hit) & np.isfinite(ref_d) & np.isfinite(test_d) & (ref_d > 0)
+    if not both.any():
+        return 0.0
+    return float(np.mean(np.abs(test_d[both] - ref_d[both]) > WRONG_SURFACE_RELATIVE * ref_d[both]))
+
+
 def visible_colour(image: Dict[str, np.ndarray]) -> np.ndarray:
     """Linear RGB of a read_image dict with every pixel that is not HIT set to black."""
     rgb = np.asarray(image["rgba"], dtype=np.float64)[..., :3]
@@ -192,7 +220,7 @@ def compare_images_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarr
 
     Colour metrics (psnr, ssim, flip) use every pixel, with pixels that are not HIT black in both
     images. ssim is None for images under 11 pixels on a side. Returns psnr, ssim, flip,
-    depth_absrel, depth_rmse, depth_pixels, hole_rate, false_hit_rate, false_miss_rate,
+    depth_absrel, depth_rmse, depth_pixels, psnr_answered, wrong_surface_rate, hole_rate, false_hit_rate, false_miss_rate,
     unknown_rate, counts, width, height, ppd and the definitions of all of them.
     """
     if ref["rgba"].shape != test["rgba"].shape:
@@ -215,6 +243,8 @@ def compare_images_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarr
         "depth_absrel": depth["absrel"],
         "depth_rmse": depth["rmse"],
         "depth_pixels": depth["pixels"],
+        "psnr_answered": psnr_over(ref_rgb, test_rgb, test["status"] != STATUS_UNKNOWN),
+        "wrong_surface_rate": wrong_surface_rate(ref["depth"], test["depth"], ref_hit, test_hit),
     }
     result.update(confusion(ref["status"], test["status"]))
     result.update({"width": int(width), "height": int(height), "ppd": float(ppd),

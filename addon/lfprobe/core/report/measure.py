@@ -17,7 +17,7 @@ from .. import metrics, native
 from .presets import Preset
 from .scene import Scene, View
 
-METRIC_KEYS = ("psnr", "ssim", "flip", "depth_absrel", "depth_rmse", "hole_rate", "false_hit_rate",
+METRIC_KEYS = ("psnr", "psnr_answered", "ssim", "flip", "depth_absrel", "depth_rmse", "hole_rate", "wrong_surface_rate", "false_hit_rate",
                "false_miss_rate", "unknown_rate")
 
 
@@ -93,13 +93,16 @@ class RunContext:
         return image, stats
 
     # --- probe renders -----------------------------------------------------------------------
-    def render_probes(self, field, camera: dict, trace: Dict) -> Tuple[dict, dict]:
-        """(image, stats) of tracing the probes; stats["seconds"] is the fastest of the
-        preset's repeats (this machine is shared: the fastest is the least disturbed)."""
+    def render_probes(self, field, camera: dict, trace: Dict, spp: Optional[int] = None,
+                      repeats: Optional[int] = None) -> Tuple[dict, dict]:
+        """(image, stats) of tracing the probes at the ground truth's samples per pixel (matched
+        filtering; `spp` overrides it); stats["seconds"] is the fastest of the preset's repeats
+        (this machine is shared: the fastest is the least disturbed), or of `repeats`."""
         text = json.dumps(camera)
+        spp = self.preset.gt_spp if spp is None else spp
         best_image, best = None, None
-        for _ in range(self.preset.timing_repeats):
-            image, stats = field.render(text, threads=self.threads, **trace)
+        for _ in range(self.preset.timing_repeats if repeats is None else repeats):
+            image, stats = field.render(text, threads=self.threads, spp=spp, **trace)
             if best is None or stats["seconds"] < best["seconds"]:
                 best_image, best = image, stats
         return best_image, best
@@ -107,6 +110,37 @@ class RunContext:
     def cleanup(self, keep: bool) -> None:
         if not keep:
             shutil.rmtree(self.work_dir, ignore_errors=True)
+
+
+def supersampled_camera(camera: dict, spp: int) -> Tuple[dict, int]:
+    """The camera at n times the resolution for n×n samples per pixel, and n: pixel (i, j) of
+    the larger image is sampled at the centre of stratum (i mod n, j mod n) of pixel
+    (i // n, j // n), the ground truth's stratified pattern, so that downsample() of its image
+    is filtered exactly as the ground truth is."""
+    n = int(round(math.sqrt(spp)))
+    if n < 1 or n * n != spp:
+        raise ValueError(f"samples per pixel must be a square, got {spp}")
+    big = dict(camera)
+    big["resolution"] = [int(camera["resolution"][0]) * n, int(camera["resolution"][1]) * n]
+    return big, n
+
+
+def downsample(image: dict, n: int) -> dict:
+    """An image rendered by supersampled_camera, filtered to the camera's own pixels: colour and
+    coverage are the mean of each n×n block; depth, normal, status and probe are the block's
+    sample nearest its centre."""
+    if n == 1:
+        return image
+    h, w = int(image["height"]) // n, int(image["width"]) // n
+    out = dict(image)
+    rgba = np.asarray(image["rgba"], np.float64).reshape(h, n, w, n, 4)
+    out["rgba"] = rgba.mean(axis=(1, 3)).astype(np.float32)
+    c = n // 2
+    for key in ("depth", "normal", "status", "probe", "steps"):
+        if key in image:
+            out[key] = np.ascontiguousarray(np.asarray(image[key])[c::n, c::n][:h, :w])
+    out["width"], out["height"] = w, h
+    return out
 
 
 def measure(reference: dict, test: dict, ppd: float = 67.0) -> Tuple[Dict[str, object], np.ndarray]:
@@ -123,9 +157,13 @@ def psnr_only(reference: dict, test: dict) -> float:
 
 
 def timing(stats: dict, pixels: int) -> Dict[str, float]:
+    """Frame time, rays per second (every ray traced, samples included, where the stats count
+    them) and pixels per second."""
     seconds = float(stats["seconds"])
+    rays = int(stats.get("rays") or pixels)
     return {"ms_per_frame": 1000.0 * seconds,
-            "rays_per_second": pixels / seconds if seconds > 0 else math.inf}
+            "rays_per_second": rays / seconds if seconds > 0 else math.inf,
+            "pixels_per_second": pixels / seconds if seconds > 0 else math.inf}
 
 
 def nearest_probe_distance(position: Sequence[float], probes: List[Sequence[float]]) -> float:

@@ -117,19 +117,20 @@ def at_probe(rows: Sequence[Dict[str, object]]) -> bytes:
     figure, axes = plt.subplots(figsize=(7.0, 4.2))
     series: Dict[str, List[Dict[str, object]]] = {}
     for r in rows:
-        series.setdefault(r["view"], []).append(r)
+        series.setdefault(f"view {r['view']}, {r['filter']}", []).append(r)
     for key, group in series.items():
         group = sorted(group, key=lambda r: r["resolution"])
-        pts = [(r["resolution"], r["psnr_vs_pixel_centre_gt"]) for r in group if _finite(r.get("psnr_vs_pixel_centre_gt"))]
+        pts = [(r["resolution"], r["psnr"]) for r in group if _finite(r.get("psnr"))]
         if pts:
-            axes.plot(*zip(*pts), marker="o", label=f"view {key}")
+            axes.plot(*zip(*pts), marker="o" if key.endswith("bilinear") else "x",
+                      linestyle="-" if key.endswith("bilinear") else ":", label=key)
     axes.set_xscale("log", base=2)
     resolutions = sorted({r["resolution"] for r in rows})
     axes.set_xticks(resolutions)
     axes.set_xticklabels([str(r) for r in resolutions])
     axes.set_xlabel("mesh-baked probe resolution N (N×N), log scale")
-    axes.set_ylabel("PSNR against pixel-centre ground truth [dB]")
-    axes.set_title("eye at the probe's centre: error left by the map's resolution", fontsize=10)
+    axes.set_ylabel("PSNR, matched samples per pixel [dB]")
+    axes.set_title("eye at the probe's centre, probe and ground truth filtered alike", fontsize=10)
     axes.grid(True, alpha=0.3)
     axes.legend(fontsize=7)
     return _png(figure)

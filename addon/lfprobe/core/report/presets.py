@@ -17,6 +17,9 @@ TRACE_VARIANTS = [
     ("nearest-first (no grid walk)", {"mode": "nearest", "thickness": 0.02, "use_coarse_levels": True}),
     ("thickness 1 cm", {"mode": "auto", "thickness": 0.01, "use_coarse_levels": True}),
     ("thickness 5 cm", {"mode": "auto", "thickness": 0.05, "use_coarse_levels": True}),
+    # The paper's colour: the first probe that answers, its one texel (no filter, no blending).
+    ("first hit, nearest texel (the paper)", {"mode": "auto", "thickness": 0.02, "use_coarse_levels": True,
+                                              "filter": "nearest", "blend": 1}),
 ]
 
 # The default trace on probes held in compact storage (ProbeField.load(storage="compact"):
@@ -50,6 +53,12 @@ class Preset:
     poisson_depth: int
     stability_resolution: int
     bake_variants: List[str] = field(default_factory=lambda: list(BAKE_VARIANTS))
+    # Samples per pixel of a converged ground truth (a square): what the matched renders are
+    # also measured against, free of the n×n ground truth's own sampling noise.
+    reference_spp: int = 256
+    # n×n Embree rays per texel for the sweep's mesh-baked grids (the section "from their own
+    # centre" bakes with the bake's default, its fidelity being what it measures).
+    mesh_supersample: int = 2
     # Adaptive placement (report section "Model only what a scene needs"): the base grid is the
     # scene grid's counts × this factor; probes are added at walk eyes up to this many, until
     # every frame is at most planning_target_unknown UNKNOWN or the scene grid's memory is spent.
@@ -61,12 +70,16 @@ class Preset:
 PRESETS = {
     "tiny": Preset("tiny", max_view_width=80, gt_spp=4, scan_step_factors=[8.0, 16.0],
                    min_scan_step_deg=1.0, fine_resolutions=[64, 128], count_factors=[1.0],
-                   trace_variants=TRACE_VARIANTS[:2], mesh_resolutions=[64, 128, 256],
+                   trace_variants=[*TRACE_VARIANTS[:2], TRACE_VARIANTS[-1]], mesh_resolutions=[64, 128, 256],
                    distance_fractions=[0.0, 0.1, 0.3, 0.6, 1.0], timing_repeats=1,
-                   poisson_depth=6, stability_resolution=64, planning_max_added=3),
+                   poisson_depth=6, stability_resolution=64, planning_max_added=3,
+                   reference_spp=16, mesh_supersample=1),
     "demo": Preset("demo", max_view_width=256, gt_spp=16, scan_step_factors=[4.0, 8.0],
                    min_scan_step_deg=0.25, fine_resolutions=[256, 512, 1024],
-                   count_factors=[0.5, 1.0], trace_variants=TRACE_VARIANTS,
+                   count_factors=[0.5, 1.0],
+                   # Without coarse levels a trace costs 5× as much for the same image: the
+                   # full preset measures it.
+                   trace_variants=[t for t in TRACE_VARIANTS if t[0] != "no coarse levels"],
                    mesh_resolutions=[256, 512, 1024, 2048],
                    distance_fractions=[0.0, 0.1, 0.3, 0.6, 1.0],
                    timing_repeats=2, poisson_depth=8, stability_resolution=256),
@@ -76,7 +89,7 @@ PRESETS = {
                    mesh_resolutions=[256, 512, 1024, 2048, 4096],
                    distance_fractions=[0.0, 0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0],
                    timing_repeats=5, poisson_depth=9, stability_resolution=512,
-                   planning_max_added=24),
+                   planning_max_added=24, mesh_supersample=4),
 }
 
 

@@ -105,6 +105,7 @@ def bake(ctx: RunContext, setup: ProbeSetup, folder: str) -> Dict[str, object]:
     placement = ProbePlacementSpec(grid_min=setup.grid_min, grid_max=setup.grid_max, counts=setup.counts)
     if setup.source == "mesh":
         options = BakeOptions(resolution=setup.resolution)
+        options.extra["supersample"] = ctx.preset.mesh_supersample
         start = time.perf_counter()
         summary = bake_from_mesh([ctx.scene.mesh], folder, placement, options)
         wall = time.perf_counter() - start
@@ -228,7 +229,9 @@ class Sweep:
                 for view in ctx.views:
                     camera = ctx.camera(view)
                     gt, _ = ctx.ground_truth(camera)
-                    image, stats = ctx.render_probes(trace_field, camera, render_args)
+                    # Variants other than the default are timed once: they compare among themselves.
+                    image, stats = ctx.render_probes(trace_field, camera, render_args,
+                                                     repeats=None if trace_label == DEFAULT_TRACE[0] else 1)
                     figures, error_map = measure(gt, image)
                     row = _row(setup, info, trace_memory, trace_label, trace, view.name)
                     row.update(timing(stats, pixel_count(camera)))
@@ -338,10 +341,14 @@ class Sweep:
                                    **timing(stats, pixel_count(camera)), **figures})
 
     def at_probe(self) -> None:
-        """Mesh-baked single probes at the probe nearest each view, seen from their own centre:
-        the error left is the map's resolution (and the image's pixel sampling)."""
+        """Mesh-baked single probes at the probe nearest each view, seen from their own centre,
+        every camera ray one texel lookup. Matched filtering: the probe render takes the ground
+        truth's n×n samples per pixel; each radiance filter is measured against that ground truth
+        and against a converged one (reference_spp), and one sample per pixel on both sides
+        shows what an unfiltered comparison measures instead."""
         ctx = self.ctx
         positions = ctx.scene.probe_positions()
+        spp, reference_spp = ctx.preset.gt_spp, ctx.preset.reference_spp
         for res in ctx.preset.mesh_resolutions:
             for view in ctx.views:
                 anchor = min(positions, key=lambda q: math.dist(q, view.position))
@@ -353,23 +360,28 @@ class Sweep:
                 field = ctx.native.ProbeField.load(folder)
                 camera = ctx.camera(view, anchor)
                 gt_centre, _ = ctx.ground_truth(camera, spp=1)
-                gt_super, _ = ctx.ground_truth(camera)
-                image, stats = ctx.render_probes(field, camera, DEFAULT_TRACE[1])
-                centre, _ = measure(gt_centre, image)
-                supersampled = psnr_only(gt_super, image)
+                gt, _ = ctx.ground_truth(camera)
+                converged, _ = ctx.ground_truth(camera, spp=reference_spp)
                 w = camera["resolution"][0]
                 fov = 2.0 * math.atan(0.5 * camera["sensor_width"] / camera["lens"])
-                self.at_probe_rows.append({
-                    "view": view.name, "resolution": res, "eye": anchor,
-                    "texel_angle_deg": math.degrees(math.sqrt(4.0 * math.pi) / res),
-                    "pixel_angle_deg": math.degrees(fov / w),
-                    "psnr_vs_pixel_centre_gt": centre["psnr"], "ssim_vs_pixel_centre_gt": centre["ssim"],
-                    "flip_vs_pixel_centre_gt": centre["flip"], "depth_absrel": centre["depth_absrel"],
-                    "hole_rate": centre["hole_rate"],
-                    f"psnr_vs_gt_{ctx.preset.gt_spp}spp": supersampled,
-                    "bake_seconds": summary["bake_seconds"], "bake_wall_seconds": bake_wall,
-                    "texels_per_ray": stats["mean_steps"], **timing(stats, pixel_count(camera)),
-                })
+                for radiance_filter in ("nearest", "bilinear"):
+                    trace = {**DEFAULT_TRACE[1], "filter": radiance_filter}
+                    image, stats = ctx.render_probes(field, camera, trace)
+                    figures, _ = measure(gt, image)
+                    centre_image, _ = ctx.render_probes(field, camera, trace, spp=1, repeats=1)
+                    self.at_probe_rows.append({
+                        "view": view.name, "resolution": res, "filter": radiance_filter, "eye": anchor,
+                        "spp": spp, "reference_spp": reference_spp,
+                        "texel_angle_deg": math.degrees(math.sqrt(4.0 * math.pi) / res),
+                        "pixel_angle_deg": math.degrees(fov / w),
+                        "psnr": figures["psnr"], "ssim": figures["ssim"], "flip": figures["flip"],
+                        "psnr_vs_converged_gt": psnr_only(converged, image),
+                        "gt_psnr_vs_converged_gt": psnr_only(converged, gt),
+                        "psnr_one_sample_per_pixel": psnr_only(gt_centre, centre_image),
+                        "depth_absrel": figures["depth_absrel"], "hole_rate": figures["hole_rate"],
+                        "bake_seconds": summary["bake_seconds"], "bake_wall_seconds": bake_wall,
+                        "texels_per_ray": stats["mean_steps"], **timing(stats, pixel_count(camera)),
+                    })
                 del field
                 shutil.rmtree(folder, ignore_errors=True)
         ctx.log(f"  mesh-baked probes at their own centre: {len(self.at_probe_rows)} renders")
