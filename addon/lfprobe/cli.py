@@ -274,7 +274,8 @@ def _cmd_render(package, args) -> int:
     offset = probe_view.frame_offset(scene, grid_obj)
     camera = camera_export.camera_dict(scene, camera_obj, offset, depsgraph=_depsgraph(scene))
     trace = probe_view.trace_settings(scene)
-    for option in ("mode", "thickness", "threads"):
+    trace["spp"] = probe_view.pixel_samples(scene)
+    for option in ("mode", "thickness", "threads", "spp", "filter", "blend"):
         value = getattr(args, option)
         if value is not None:
             trace[option] = value
@@ -286,9 +287,10 @@ def _cmd_render(package, args) -> int:
     field = probe_view.load_field(folder, probe_view.coarse_resolution(grid_obj))
     _image, stats = field.render(json.dumps(camera), output=out, **trace)
     rays = max(int(stats["rays"]), 1)
+    pixels = max(int(stats["hits"] + stats["misses"] + stats["unknown"]), 1)
     print(f"lfprobe: rendered {out} from camera '{camera_obj.name}' through grid '{grid_obj.name}': "
           f"{rays:,} rays in {stats['seconds'] * 1000:.1f} ms ({stats['rays_per_second'] / 1e6:.2f} M rays/s), "
-          f"HIT {100 * stats['hits'] / rays:.2f}%, UNKNOWN {100 * stats['unknown'] / rays:.2f}%")
+          f"pixels HIT {100 * stats['hits'] / pixels:.2f}%, UNKNOWN {100 * stats['unknown'] / pixels:.2f}%")
     return EXIT_OK
 
 
@@ -389,6 +391,12 @@ def build_parser() -> argparse.ArgumentParser:
                         help="probe order (default: the scene's render setting)")
     render.add_argument("--thickness", type=float, default=None, help="surface thickness in metres")
     render.add_argument("--threads", type=int, default=None, help="cores (0: all); the image is the same")
+    render.add_argument("--spp", type=int, default=None, metavar="N",
+                        help="samples per pixel, 1 or a square (default: the scene's Pixel Samples squared)")
+    render.add_argument("--filter", choices=["nearest", "bilinear"], default=None,
+                        help="a hit's colour: its texel, or interpolated on the same surface (default: the scene's)")
+    render.add_argument("--blend", type=int, default=None, metavar="N",
+                        help="probes a hit's colour is blended from, 1-8 (default: the scene's)")
     render.add_argument("--camera-json", metavar="CAM.json", help="also write the camera file used")
     render.set_defaults(run=_cmd_render)
 
@@ -399,7 +407,8 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("--out", required=True, metavar="DIR", help="report folder (created)")
     compare.add_argument("--camera", default="", metavar="NAME", help="camera object (default: the scene camera)")
     compare.add_argument("--grid", default="", metavar="NAME", help="probe grid (default as for render)")
-    compare.add_argument("--spp", type=int, default=1, help="ground truth samples per pixel (1 or a square)")
+    compare.add_argument("--spp", type=int, default=16,
+                         help="samples per pixel of the ground truth and the probe render alike (1 or a square)")
     compare.add_argument("--ppd", type=float, default=67.0, help="FLIP pixels per degree")
     compare.set_defaults(run=_cmd_compare)
     return parser

@@ -116,7 +116,9 @@ class ComparePlan:
         """Traces the probes, measures against the ground truth, writes the report."""
         _native = native.load()
         field = probe_view.load_field(self.folder, self.coarse_resolution)
-        _image, probe_stats = field.render(json.dumps(self.camera), output=self.paths["probes"], **self.trace)
+        # Matched filtering: the probes take the ground truth's samples per pixel.
+        _image, probe_stats = field.render(json.dumps(self.camera), output=self.paths["probes"], spp=self.spp,
+                                           **self.trace)
         reference = _native.read_image(self.paths["ground_truth"])
         test = _native.read_image(self.paths["probes"])
         start = time.perf_counter()
@@ -218,8 +220,10 @@ class LFPROBE_OT_compare(NativeJobOperator, bpy.types.Operator):
         subtype="DIR_PATH",
         default="",
     )
-    spp: IntProperty(name="Samples per Pixel", description="Ground truth samples: 1 or a square",
-                     min=1, soft_max=64, default=1)
+    spp: IntProperty(name="Samples per Pixel",
+                     description="Samples per pixel of the ground truth and of the probe render alike (matched "
+                                 "filtering): 1 or a square",
+                     min=1, soft_max=64, default=16)
     open_images: BoolProperty(name="Open Images", description="Show the images in an Image Editor",
                               default=True)
 

@@ -73,6 +73,33 @@ class LFProbeRenderSettings(bpy.types.PropertyGroup):
         default=0,
         update=_redraw_viewports,
     )
+    samples: IntProperty(
+        name="Pixel Samples",
+        description="F12 and Compare: n×n rays per pixel on a stratified grid, their colour and coverage "
+                    "averaged (anti-aliasing; depth and passes from the pixel centre). 1: one ray through "
+                    "each pixel centre. The viewport traces one ray per pixel",
+        min=1,
+        max=8,
+        default=2,
+    )
+    radiance_filter: EnumProperty(
+        name="Radiance Filter",
+        items=(
+            ("bilinear", "Bilinear", "Interpolate between the texels around a hit that lie on the same surface"),
+            ("nearest", "Nearest", "The colour of the one texel the ray met (the paper's lookup)"),
+        ),
+        default="bilinear",
+        update=_redraw_viewports,
+    )
+    blend: IntProperty(
+        name="Blend Probes",
+        description="Probes a hit's colour is blended from, each weighted by how finely it sees the point "
+                    "(1: the first probe that answers alone)",
+        min=1,
+        max=8,
+        default=4,
+        update=_redraw_viewports,
+    )
 
 
 def _to_bottom_up(array: np.ndarray, channels: int) -> np.ndarray:
@@ -154,7 +181,8 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
         width, height = camera["resolution"]
         self.update_stats("", f"Light Field Probes: tracing {width}×{height} through {field.probe_count} probes")
         # In the background, so that Esc (test_break) stops the trace mid-frame.
-        job = field.start_render(json.dumps(camera), **probe_view.trace_settings(scene))
+        job = field.start_render(json.dumps(camera), spp=probe_view.pixel_samples(scene),
+                                 **probe_view.trace_settings(scene))
         while not job.wait(0.1):
             if self.test_break():
                 job.cancel()
@@ -162,9 +190,9 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
                 return None
             self.update_progress(job.fraction)
         image, stats = job.result()
-        rays = max(int(stats["rays"]), 1)
+        pixels = max(int(stats["hits"] + stats["misses"] + stats["unknown"]), 1)
         self.update_stats("", f"Light Field Probes: {stats['seconds'] * 1000:.0f} ms, "
-                              f"{stats['rays_per_second'] / 1e6:.2f} M rays/s, HIT {100 * stats['hits'] / rays:.1f}%")
+                              f"{stats['rays_per_second'] / 1e6:.2f} M rays/s, HIT {100 * stats['hits'] / pixels:.1f}%")
         return image
 
     def _write_result(self, depsgraph, image) -> None:
@@ -273,6 +301,9 @@ class RENDER_PT_lfprobe_trace(bpy.types.Panel):
                          icon="INFO" if baked else "ERROR")
         layout.prop(settings, "mode")
         layout.prop(settings, "thickness")
+        layout.prop(settings, "samples")
+        layout.prop(settings, "radiance_filter")
+        layout.prop(settings, "blend")
         layout.prop(settings, "threads")
 
 

@@ -124,4 +124,11 @@ def forget_fields() -> None:
 def trace_settings(scene) -> dict:
     """The scene's trace settings as keyword arguments of ProbeField.render."""
     settings = render_settings(scene)
-    return {"mode": settings.mode.lower(), "thickness": float(settings.thickness), "threads": int(settings.threads)}
+    return {"mode": settings.mode.lower(), "thickness": float(settings.thickness), "threads": int(settings.threads),
+            "filter": settings.radiance_filter, "blend": int(settings.blend)}
+
+
+def pixel_samples(scene) -> int:
+    """Rays per pixel of a final render (F12, Compare, the batch render): the scene's n×n."""
+    n = int(render_settings(scene).samples)
+    return n * n
