@@ -1,4 +1,4 @@
-// The z-buffered point splat baseline (DESIGN.md §5): nearest point wins whatever the order,
+// The z-buffered point splat baseline (DESIGN.md §6): nearest point wins whatever the order,
 // depths match the analytic scene, the output is the same for any thread count.
 #include <algorithm>
 #include <cmath>

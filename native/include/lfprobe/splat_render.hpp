@@ -1,4 +1,4 @@
-// The geometry-free baseline the probes must beat (DESIGN.md §5): the raw point cloud drawn as
+// The geometry-free baseline the probes must beat (DESIGN.md §6): the raw point cloud drawn as
 // z-buffered screen-space squares, each the size of its point's patch (the local spacing) at
 // its depth, nearest point winning per pixel. Same camera and same image channels as a probe
 // trace; covered pixels are HIT, the rest MISS. Deterministic for any thread count: every
