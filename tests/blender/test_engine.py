@@ -47,8 +47,10 @@ def test_f12_matches_the_cli_render_of_the_same_camera():
     camera_json = camera_export.camera_dict(bpy.context.scene, camera)
     cam_path = probe_scene.write_json(os.path.join(work, "camera.json"), camera_json)
     out = os.path.join(work, "cli.exr")
+    # F12 takes the scene's Pixel Samples (n×n), the CLI the same as --spp.
+    spp = str(bpy.context.scene.lfprobe_render.samples ** 2)
     result = probe_scene.lfprobe_cli("render", "--probes", grid.lfprobe_grid.probe_dir, "--camera", cam_path,
-                                     "--out", out, "--quiet")
+                                     "--out", out, "--quiet", "--spp", spp)
     assert result.returncode == 0, result.stderr
     cli = _native().read_image(out)
 
@@ -220,5 +222,10 @@ def test_engine_settings_choose_the_grid():
     scene.lfprobe_render.mode = "nearest"
     scene.lfprobe_render.threads = 1
     assert probe_view.trace_settings(scene) == {"mode": "nearest", "thickness": scene.lfprobe_render.thickness,
-                                                "threads": 1}
+                                                "threads": 1, "filter": "bilinear", "blend": 4}
+    scene.lfprobe_render.radiance_filter = "nearest"
+    scene.lfprobe_render.blend = 1
+    scene.lfprobe_render.samples = 3
+    assert probe_view.trace_settings(scene)["filter"] == "nearest" and probe_view.trace_settings(scene)["blend"] == 1
+    assert probe_view.pixel_samples(scene) == 9
     bpy.ops.render.render()  # nearest-first tracing renders too

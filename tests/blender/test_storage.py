@@ -82,7 +82,8 @@ def test_compact_bake_loads_compact_and_f12_matches_the_cli():
     for storage in ("manifest", "full"):
         out = os.path.join(work, f"cli_{storage}.exr")
         result = probe_scene.lfprobe_cli("render", "--probes", folder, "--camera", cam_path, "--out", out,
-                                         "--storage", storage, "--quiet")
+                                         "--storage", storage, "--quiet",
+                                         "--spp", str(bpy.context.scene.lfprobe_render.samples ** 2))
         assert result.returncode == 0, result.stderr
         images[storage] = native.read_image(out)
     cli = images["manifest"]
