@@ -36,7 +36,7 @@ void check_settings(const MeshBakeSettings& s) {
 glm::vec3 texel_footprint_colour(const EmbreeScene& scene, const glm::dvec3& position,
                                  oct::Texel texel, int n, int ss, const MeshHit& centre,
                                  const glm::dvec3& normal) {
-    const double distance_scale = centre.t * 3.5449077018110318 / n; // the texel's footprint
+    const double distance_scale = centre.t * oct::kTexelAngleTimesN / n; // the texel's footprint
     const double same_surface = 1e-4 + 2.0 * distance_scale;
     const glm::dvec3 centre_point =
         position + centre.t * glm::dvec3(oct::texel_direction(texel, n));

@@ -68,6 +68,7 @@ struct Surfel {
     glm::vec3 normal;
     float normal_v = 0.0f;
     float reach = 0.0f;
+    float splat_angle = 0.0f; // the splat's angular radius seen face-on from the probe
 };
 
 // Where the ray from the probe centre along unit `texel_dir` meets a point's surface plane:
@@ -121,9 +122,6 @@ void keep_smaller(std::uint64_t& slot, std::uint64_t value) {
            !ref.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
     }
 }
-
-// The angular size of a texel of an N×N octahedral map is about sqrt(4π)/N (4π sr over N²).
-constexpr float kTexelAngleTimesN = 3.5449077f;
 
 // How much of a texel a point's colour stands for: 1 at the texel's centre, falling to 0 at the
 // edge of a disc of the texel's half angle or the point's splat angle, whichever is larger (a
@@ -235,7 +233,8 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
             return;
         }
         const oct::Texel home = oct::texel_of_direction(p.dir, n);
-        const float alpha = std::atan2(settings.splat_scale * geometry.spacing[i], p.dist);
+        p.splat_angle = std::atan2(settings.splat_scale * geometry.spacing[i], p.dist);
+        const float alpha = p.splat_angle;
         const float cos_alpha = std::cos(alpha);
         // A point with no surface (too few neighbours for a normal) keeps the whole cone.
         const bool has_plane = glm::dot(p.normal, p.normal) > 0.0f;
@@ -305,7 +304,8 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     // weighted by how much of the texel each covers (texel_colour_weight): a texel's radiance
     // is the average of what it covers, not one sample. Sums are integers, so the colour is
     // the same for any thread count and any order of the points.
-    const float half_texel_angle = 0.5f * kTexelAngleTimesN / static_cast<float>(n);
+    const float half_texel_angle =
+        0.5f * static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(n);
     std::vector<std::uint64_t> winner(texels, kNoPoint);
     std::vector<ColourSum> colour_sums(texels);
     const auto colour_of = [&](std::size_t i) {
@@ -319,9 +319,6 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     };
     over_points("splatting points: colour", [&](std::size_t i) {
         const float thickness = geometry.spacing[i];
-        const float splat_angle =
-            std::atan2(settings.splat_scale * geometry.spacing[i],
-                       glm::length(glm::vec3(glm::dvec3(cloud.positions[i]) - centre)));
         const glm::vec3 rgb = colour_of(i);
         for_each_splat_texel(i, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
             const float depth = surfel_depth(p, hit);
@@ -332,7 +329,8 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
             const float off_centre = std::max(0.0f, 1.0f - glm::dot(directions[t], p.dir));
             keep_smaller(winner[t], (static_cast<std::uint64_t>(ordered_bits(off_centre)) << 32) |
                                         static_cast<std::uint32_t>(i));
-            colour_sums[t].add(rgb, texel_colour_weight(off_centre, half_texel_angle, splat_angle));
+            colour_sums[t].add(rgb,
+                               texel_colour_weight(off_centre, half_texel_angle, p.splat_angle));
         });
     });
 

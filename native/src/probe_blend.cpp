@@ -15,8 +15,6 @@ namespace lfprobe {
 namespace {
 
 constexpr std::size_t kMaxBlend = 8;
-// The angular size of a texel of an N×N octahedral map is about sqrt(4π)/N.
-constexpr double kTexelAngleTimesN = 3.5449077018110318;
 // Below this cosine a probe sees the surface too obliquely to add to its colour.
 constexpr double kMinCosine = 0.05;
 
@@ -128,7 +126,7 @@ double sampling_weight(const glm::dvec3& position, int resolution, const glm::dv
         return 0.0;
     }
     const double n = static_cast<double>(resolution);
-    const double texel_angle = kTexelAngleTimesN / n;
+    const double texel_angle = oct::kTexelAngleTimesN / n;
     const double off_view = std::acos(std::clamp(-glm::dot(view, to_probe) / r, -1.0, 1.0));
     const double angle = off_view + texel_angle;
     return n * n * cosine / (r2 * angle * angle);

@@ -18,7 +18,7 @@ namespace lfprobe {
 
 namespace {
 
-constexpr double kSqrtFourPi = 3.5449077018110318;
+constexpr double kSqrtFourPi = oct::kTexelAngleTimesN;
 constexpr std::uint64_t kNoPoint = std::numeric_limits<std::uint64_t>::max();
 
 double quantile_of(std::vector<double>& values, double q) {

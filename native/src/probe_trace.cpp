@@ -16,14 +16,12 @@ namespace lfprobe {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-// The angular size of a texel of an N×N octahedral map is about sqrt(4π)/N (4π sr over N²).
-constexpr double kTexelAngleTimesN = 3.5449077018110318;
 
 // The texel term of surface_thickness per metre of distance, for a map of resolution n: one
 // expression for the walk, the lookup and surface_thickness, so that their sums agree bit for
 // bit.
 [[nodiscard]] double thickness_per_metre(const TraceSettings& settings, int n) {
-    return settings.thickness_texels * kTexelAngleTimesN / static_cast<double>(n);
+    return settings.thickness_texels * oct::kTexelAngleTimesN / static_cast<double>(n);
 }
 constexpr int kMaxLevels = 32;
 // Texel units: how far from a texel edge a map coordinate must be for its texel to be taken

@@ -16,6 +16,10 @@
 
 namespace lfprobe::oct {
 
+// The angular size of a texel of an N×N map is about sqrt(4π)/N radians (4π sr over N²
+// texels): this constant over N.
+inline constexpr double kTexelAngleTimesN = 3.5449077018110318;
+
 // s(a) of DESIGN.md: -0.0 maps to +1 (copysign and signbit would give -1).
 [[nodiscard]] constexpr float sign_not_zero(float a) {
     return a >= 0.0f ? 1.0f : -1.0f;
