@@ -1,0 +1,96 @@
+#!/usr/bin/python3
+"""Says where two runs of tools/reference_outputs.sh (or two report folders) differ, timings
+aside: every EXR's channels bit for bit and its metadata JSON, every probe set's files byte for
+byte, report.json's values, and the report's view images (PNG) byte for byte.
+
+usage: /usr/bin/python3 tools/diff_outputs.py BEFORE AFTER     (exit status 1 when anything differs)
+"""
+import json
+import math
+import re
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "addon"))
+
+# Keys whose values are clock readings or derived from them.
+TIMING = re.compile(r"seconds|per_second|_ms|ms_|speedup|fps|time|wall|elapsed|date", re.I)
+# Files written with the time or the machine in them, or whose bytes encode timings.
+SKIP_FILES = {"report.html", "report.log"}
+
+
+def flatten(value, path=""):
+    if isinstance(value, dict):
+        for k, v in value.items():
+            yield from flatten(v, f"{path}/{k}")
+    elif isinstance(value, list):
+        for i, v in enumerate(value):
+            yield from flatten(v, f"{path}[{i}]")
+    else:
+        yield path, value
+
+
+def same_value(a, b):
+    if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
+        return True
+    return a == b
+
+
+def diff_json(a, b, label):
+    fa = {k: v for k, v in flatten(a) if not TIMING.search(k)}
+    fb = {k: v for k, v in flatten(b) if not TIMING.search(k)}
+    out = []
+    for k in sorted(set(fa) | set(fb)):
+        if k not in fa or k not in fb:
+            out.append(f"{label}: {k} only in {'after' if k not in fa else 'before'}")
+        elif not same_value(fa[k], fb[k]):
+            out.append(f"{label}: {k}: {fa[k]!r} -> {fb[k]!r}")
+    return out
+
+
+def diff_exr(pa, pb, label):
+    from lfprobe import _native
+    import numpy as np
+
+    a, b = _native.read_image(str(pa)), _native.read_image(str(pb))
+    out = []
+    for key in ("rgba", "depth", "normal", "status", "probe", "steps"):
+        x, y = np.asarray(a[key]), np.asarray(b[key])
+        if x.shape != y.shape or x.tobytes() != y.tobytes():
+            n = int(np.sum(x != y)) if x.shape == y.shape else -1
+            out.append(f"{label}: channel {key} differs ({n} values)")
+    ma = json.loads(a["metadata"]) if a["metadata"] else {}
+    mb = json.loads(b["metadata"]) if b["metadata"] else {}
+    out += diff_json(ma, mb, f"{label} metadata")
+    return out
+
+
+def main(argv):
+    if len(argv) != 3:
+        print(__doc__, file=sys.stderr)
+        return 2
+    before, after = Path(argv[1]), Path(argv[2])
+    files_a = {p.relative_to(before) for p in before.rglob("*") if p.is_file()}
+    files_b = {p.relative_to(after) for p in after.rglob("*") if p.is_file()}
+    problems = [f"only before: {p}" for p in sorted(files_a - files_b)]
+    problems += [f"only after: {p}" for p in sorted(files_b - files_a)]
+    compared = 0
+    for rel in sorted(files_a & files_b):
+        pa, pb = before / rel, after / rel
+        if rel.name in SKIP_FILES or "plot" in rel.name:
+            continue
+        compared += 1
+        if rel.suffix == ".exr" and rel.parts[0] != "mesh_probe" and "probe_" not in rel.name:
+            problems += diff_exr(pa, pb, str(rel))
+        elif rel.suffix == ".json" and rel.name in ("report.json", "manifest.json"):
+            problems += diff_json(json.loads(pa.read_text()), json.loads(pb.read_text()), str(rel))
+        elif pa.read_bytes() != pb.read_bytes():
+            problems.append(f"{rel}: bytes differ")
+    for line in problems:
+        print(line)
+    print(f"{compared} files compared, {len(problems)} differences")
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
