@@ -16,6 +16,7 @@ import numpy as np
 from bpy.props import StringProperty
 
 from ..core import native, pipeline
+from ..core.atomic_write import replace_folder
 from ..core.probe_set import MANIFEST, read_manifest, summarize
 from ..core.sources import default_cache_dir, describe_scan
 from . import grid as grid_module
@@ -178,17 +179,6 @@ class GridBake:
         return cloud, sources
 
 
-def install_probe_set(staging: str, folder: str) -> None:
-    """Puts the finished probe set in `staging` in place of the one in `folder` (renames, never
-    half a set)."""
-    old = folder.rstrip(os.sep) + ".old"
-    shutil.rmtree(old, ignore_errors=True)
-    if os.path.exists(folder):
-        os.rename(folder, old)
-    os.rename(staging, folder)
-    shutil.rmtree(old, ignore_errors=True)
-
-
 def show_baked_set(grid, manifest: dict, base_probes: int = -1) -> None:
     """Marks the grid as baked with the coverage and plan of its grid probes (the first
     `base_probes` of the manifest, all when negative); probes added for views, if any, are the
@@ -343,7 +333,7 @@ class LFPROBE_OT_bake(GridJobOperator, bpy.types.Operator):
         # The jobs ran with start_only, which leaves the storage to the caller: recorded while
         # the set is still staged, so the folder never holds a set that loads otherwise.
         pipeline.apply_storage(self._staging, result, inputs.options)
-        install_probe_set(self._staging, inputs.folder)
+        replace_folder(self._staging, inputs.folder)
         self._staging = None
         manifest = read_manifest(inputs.folder)
         grid_obj = bpy.data.objects.get(inputs.grid_name)

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import time
 
 import bpy
@@ -21,6 +20,7 @@ import numpy as np
 from bpy.props import BoolProperty, IntProperty, StringProperty
 
 from ..core import metrics, native
+from ..core.atomic_write import atomic_open
 from ..core.camera_json import write_camera
 from ..core.cli_compare import _magma, _strict_json, write_png
 from . import camera_export, probe_view
@@ -65,15 +65,8 @@ def _srgb8(rgba) -> np.ndarray:
 
 
 def _write_json(path: str, value) -> None:
-    fd, tmp = tempfile.mkstemp(dir=os.path.dirname(path), prefix=".compare-", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as stream:
-            json.dump(_strict_json(value), stream, indent=2, allow_nan=False)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    with atomic_open(path) as stream:
+        json.dump(_strict_json(value), stream, indent=2, allow_nan=False)
 
 
 class ComparePlan:

@@ -20,6 +20,7 @@ import numpy as np
 from bpy.props import CollectionProperty, StringProperty
 
 from ..core import adaptive, native
+from ..core.atomic_write import replace_folder
 from ..core.probe_set import read_manifest
 from . import bake
 from . import camera_export
@@ -201,7 +202,7 @@ class LFPROBE_OT_place_for_views(bake.GridJobOperator, bpy.types.Operator):
                                                          sources=sources, progress=report, **settings),
                 name="lfprobe adaptive placement",
             )
-        bake.install_probe_set(self._staging, inputs.folder)
+        replace_folder(self._staging, inputs.folder)
         self._staging = None
         manifest = read_manifest(inputs.folder)
         record = placement_record(result, self._cameras, inputs.offset, self._target, self._budget_mib)

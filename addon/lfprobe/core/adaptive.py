@@ -20,6 +20,7 @@ from typing import Callable, Dict, List, Optional, Sequence
 import numpy as np
 
 from . import native
+from .atomic_write import atomic_open
 from .pipeline import BakeOptions, Progress, ProbePlacementSpec, bake_from_cloud
 from .probe_set import MANIFEST, coarse_level_bytes, read_manifest
 
@@ -77,10 +78,8 @@ def unknown_rate(image: dict) -> float:
 
 def _write_manifest(folder: str, manifest: dict) -> None:
     path = os.path.join(folder, MANIFEST)
-    tmp = path + ".tmp"
-    with open(tmp, "w", encoding="utf-8") as stream:
+    with atomic_open(path) as stream:
         json.dump(manifest, stream, indent=2, sort_keys=True)
-    os.replace(tmp, path)
 
 
 class _GrowingSet:

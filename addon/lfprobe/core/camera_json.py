@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import json
 import math
-import os
-import tempfile
 from typing import Sequence
+
+from .atomic_write import atomic_open
 
 
 def look_at_matrix(position: Sequence[float], target: Sequence[float], up=(0.0, 0.0, 1.0)):
@@ -64,14 +64,6 @@ def camera_dict(
 
 
 def write_camera(path: str, camera: dict) -> None:
-    """Writes the camera JSON through a temporary file and a rename."""
-    folder = os.path.dirname(os.path.abspath(path))
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".camera-", suffix=".tmp")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as stream:
-            json.dump(camera, stream, indent=2)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    """Writes the camera JSON whole (atomic_open)."""
+    with atomic_open(path) as stream:
+        json.dump(camera, stream, indent=2)

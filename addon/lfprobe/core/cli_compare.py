@@ -21,6 +21,7 @@ from typing import Dict, Optional
 import numpy as np
 
 from . import metrics, native
+from .atomic_write import atomic_open
 
 
 def _read(path: str) -> Dict[str, object]:
@@ -65,7 +66,7 @@ def write_png(path: str, rgb8: np.ndarray) -> None:
         return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
 
     header = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)
-    with open(path, "wb") as f:
+    with atomic_open(path, "wb") as f:
         f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 6))
                 + chunk(b"IEND", b""))
 

@@ -10,6 +10,7 @@ import json
 import os
 from collections import Counter
 
+from .atomic_write import atomic_open
 from .cli_storage import add_storage_arguments, bake_storage
 from .pipeline import ProbePlacementSpec, load_scans, plan_probes
 from .progress import TerminalProgress
@@ -108,10 +109,8 @@ def _cmd_place_adaptive(args) -> int:
     data = {"scans": [os.path.abspath(p) for p in args.scan], "points": len(cloud),
             "views": [os.path.abspath(p) for p in args.views], **result.as_dict()}
     if args.out:
-        tmp = args.out + ".tmp"
-        with open(tmp, "w", encoding="utf-8") as f:
+        with atomic_open(args.out) as f:
             json.dump(data, f, indent=2)
-        os.replace(tmp, args.out)
     if args.json:
         print(json.dumps(data, indent=2))
         return 0
@@ -148,10 +147,8 @@ def _cmd_place(args) -> int:
     result = {"scans": [os.path.abspath(p) for p in args.scan], "points": len(cloud),
               "probes": probes}
     if args.out:
-        tmp = args.out + ".tmp"
-        with open(tmp, "w", encoding="utf-8") as f:
+        with atomic_open(args.out) as f:
             json.dump(result, f, indent=2)
-        os.replace(tmp, args.out)
     if args.json:
         print(json.dumps(result, indent=2))
         return 0

@@ -8,27 +8,14 @@ import io
 import json
 import math
 import os
-import tempfile
 from typing import Dict, Iterable, List
 
-
-_UMASK = os.umask(0)
-os.umask(_UMASK)
+from .. import atomic_write
 
 
 def write_bytes(path: str, data: bytes) -> None:
-    folder = os.path.dirname(os.path.abspath(path))
-    os.makedirs(folder, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".tmp-", suffix=os.path.basename(path))
-    try:
-        with os.fdopen(fd, "wb") as stream:
-            stream.write(data)
-        os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; a report is for sharing
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
+    os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+    atomic_write.write_bytes(path, data)
 
 
 def write_text(path: str, text: str) -> None:

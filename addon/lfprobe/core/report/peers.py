@@ -12,6 +12,7 @@ from typing import Dict, List, Optional, Tuple
 
 import numpy as np
 
+from ..atomic_write import atomic_open
 from .measure import RunContext, downsample, measure, pixel_count, supersampled_camera, timing
 
 
@@ -54,12 +55,10 @@ def _write_ply(path: str, vertices_world: np.ndarray, colours: np.ndarray, trian
     vertex["p"], vertex["c"] = vertices_world, np.clip(colours, 0.0, 1.0)
     face = np.zeros(len(triangles), dtype=[("n", "u1"), ("i", "<i4", 3)])
     face["n"], face["i"] = 3, triangles
-    tmp = path + ".tmp"
-    with open(tmp, "wb") as out:
+    with atomic_open(path, "wb") as out:
         out.write(header.encode("ascii"))
         out.write(vertex.tobytes())
         out.write(face.tobytes())
-    os.replace(tmp, path)
 
 
 def poisson_mesh(ctx: RunContext, density) -> Tuple[Optional[str], Dict[str, object]]:

@@ -13,6 +13,7 @@ from typing import Dict, List, Sequence
 
 import numpy as np
 
+from ..atomic_write import write_text
 from ..camera_json import camera_dict
 from ..cli_mesh import bake_from_mesh
 from ..pipeline import BakeOptions, ProbePlacementSpec
@@ -74,9 +75,7 @@ def shifted_obj(source: str, target: str, offset: Sequence[float]) -> None:
                 lines.append("mtllib " + " ".join(os.path.join(folder, w) for w in words[1:]))
             else:
                 lines.append(line.rstrip("\n"))
-    with open(target + ".tmp", "w", encoding="utf-8") as out:
-        out.write("\n".join(lines) + "\n")
-    os.replace(target + ".tmp", target)
+    write_text(target, "\n".join(lines) + "\n")
 
 
 def run(ctx: RunContext) -> List[Dict[str, object]]:
