@@ -16,13 +16,13 @@ import os
 import time
 
 import bpy
-import numpy as np
 from bpy.props import BoolProperty, IntProperty, StringProperty
 
 from ..core import metrics, native
 from ..core.atomic_write import atomic_open
 from ..core.camera_json import write_camera
-from ..core.cli_compare import _magma, _strict_json, write_png
+from ..core.cli_compare import _strict_json, write_png
+from ..core.colour import magma8, srgb8
 from . import camera_export, probe_view
 from .job_modal import NativeJobOperator
 from .mesh_export import MeshExportError, native_mesh_from_objects
@@ -57,11 +57,6 @@ def default_report_dir() -> str:
         raise CompareError("save the .blend first (the report goes next to it), or give an output folder")
     stem = os.path.splitext(os.path.basename(bpy.data.filepath))[0]
     return bpy.path.abspath(f"//{stem}_compare")
-
-
-def _srgb8(rgba) -> np.ndarray:
-    """Linear RGBA → 8-bit sRGB RGB for a PNG preview (alpha dropped: misses are black)."""
-    return (metrics.srgb_encode(rgba[..., :3]) * 255.0 + 0.5).astype(np.uint8)
 
 
 def _write_json(path: str, value) -> None:
@@ -117,9 +112,9 @@ class ComparePlan:
         start = time.perf_counter()
         result, error_map = metrics.compare_images_with_map(reference, test, ppd=self.ppd)
         result["compare_seconds"] = time.perf_counter() - start
-        write_png(self.paths["error"], _magma(error_map))
+        write_png(self.paths["error"], magma8(error_map))
         for key, image in (("ground_truth_preview", reference), ("probes_preview", test)):
-            write_png(self.paths[key], _srgb8(image["rgba"]))
+            write_png(self.paths[key], srgb8(image["rgba"][..., :3]))  # alpha dropped: misses are black
         result.update({
             "reference": self.paths["ground_truth"],
             "test": self.paths["probes"],

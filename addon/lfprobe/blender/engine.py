@@ -20,6 +20,7 @@ import bpy
 import numpy as np
 from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
 
+from ..core.colour import srgb_display_rgba
 from . import camera_export, grid as grid_module, probe_view
 from .viewport import ProgressiveView
 
@@ -106,16 +107,6 @@ def _to_bottom_up(array: np.ndarray, channels: int) -> np.ndarray:
     """A native image (top row first) as a render pass's rect (bottom row first, (h·w, c))."""
     flipped = np.ascontiguousarray(array[::-1], dtype=np.float32)
     return flipped.reshape(-1, channels)
-
-
-def _srgb_display(rgba: np.ndarray) -> np.ndarray:
-    """Linear premultiplied RGBA → sRGB-encoded RGBA, bottom row first, for the viewport texture."""
-    rgb = np.clip(rgba[..., :3], 0.0, 1.0)
-    encoded = np.where(rgb <= 0.0031308, 12.92 * rgb, 1.055 * np.power(rgb, 1.0 / 2.4) - 0.055)
-    out = np.empty(rgba.shape, dtype=np.float32)
-    out[..., :3] = encoded
-    out[..., 3] = np.clip(rgba[..., 3], 0.0, 1.0)
-    return np.ascontiguousarray(out[::-1])
 
 
 _last_drawn_view = [None]  # the ProgressiveView a viewport drew last (for viewport_stats)
@@ -269,7 +260,8 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
         from gpu_extras.presets import draw_texture_2d
 
         if self._texture_image is not view_image:
-            pixels = _srgb_display(view_image.rgba)
+            # Bottom row first, as a GPU texture is filled.
+            pixels = np.ascontiguousarray(srgb_display_rgba(view_image.rgba)[::-1])
             h, w = pixels.shape[:2]
             buffer = gpu.types.Buffer("FLOAT", w * h * 4, pixels.ravel())
             self._texture = gpu.types.GPUTexture((w, h), format="RGBA16F", data=buffer)

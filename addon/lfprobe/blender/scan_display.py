@@ -8,6 +8,7 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
+from ..core.colour import srgb_encode
 from .properties import COLOR_ATTRIBUTE
 
 POINT_SIZE = 2.0
@@ -28,8 +29,7 @@ def display_arrays(obj):
     if attribute is not None and attribute.data_type == "FLOAT_COLOR" and attribute.domain == "POINT":
         attribute.data.foreach_get("color", colours)
     colours = colours.reshape(n, 4)
-    linear = np.clip(colours[:, :3], 0.0, 1.0)
-    colours[:, :3] = np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * np.power(linear, 1 / 2.4) - 0.055)
+    colours[:, :3] = srgb_encode(colours[:, :3], dtype=np.float32)
     return positions.reshape(n, 3), colours
 
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from . import metrics, native
 from .atomic_write import atomic_open
+from .colour import magma8
 
 
 def _read(path: str) -> Dict[str, object]:
@@ -43,18 +44,6 @@ def _render_seconds(image: Dict[str, object]) -> Optional[float]:
         return float(seconds) if seconds is not None else None
     except (ValueError, AttributeError, TypeError):
         return None
-
-
-def _magma(values: np.ndarray) -> np.ndarray:
-    """Error values in [0, 1] → 8-bit RGB through matplotlib's magma map (grey if it is missing)."""
-    v = np.clip(np.nan_to_num(values, nan=0.0), 0.0, 1.0)
-    try:
-        import matplotlib
-
-        lut = (matplotlib.colormaps["magma"](np.linspace(0.0, 1.0, 256))[:, :3] * 255.0 + 0.5).astype(np.uint8)
-    except (ImportError, KeyError, AttributeError):
-        lut = np.repeat(np.arange(256, dtype=np.uint8)[:, None], 3, axis=1)
-    return lut[(v * 255.0 + 0.5).astype(np.int64)]
 
 
 def write_png(path: str, rgb8: np.ndarray) -> None:
@@ -133,7 +122,7 @@ def _cmd_compare(args) -> int:
     result["ref_render_seconds"] = _render_seconds(ref)
     result["test_render_seconds"] = _render_seconds(test)
     if args.error_map:
-        write_png(args.error_map, _magma(error_map))
+        write_png(args.error_map, magma8(error_map))
         result["error_map"] = os.path.abspath(args.error_map)
     if args.json:
         print(json.dumps(_strict_json(result), indent=2, allow_nan=False))

@@ -15,6 +15,7 @@ from typing import Dict, Optional, Tuple
 import numpy as np
 
 from . import flip as _flip
+from .colour import srgb_encode  # noqa: F401  (metrics.srgb_encode: what the figures encode with)
 
 STATUS_MISS, STATUS_HIT, STATUS_UNKNOWN = 0, 1, 2
 
@@ -52,13 +53,6 @@ DEFINITIONS = {
     "counts": "confusion counts: ground truth (hit, miss) × test (HIT, MISS, UNKNOWN); reference "
               "pixels that are themselves UNKNOWN are left out and counted in ref_unknown",
 }
-
-
-def srgb_encode(linear: np.ndarray) -> np.ndarray:
-    """Linear colour → sRGB-encoded colour in [0, 1]: clamp to [0, 1] (NaN → 0), then the sRGB
-    curve 12.92·c below 0.0031308 and 1.055·c^(1/2.4) − 0.055 above."""
-    c = np.clip(np.nan_to_num(np.asarray(linear, dtype=np.float64), nan=0.0), 0.0, 1.0)
-    return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
 
 
 def _check_pair(ref: np.ndarray, test: np.ndarray) -> None:

@@ -9,6 +9,7 @@ from typing import Dict, Sequence
 import numpy as np
 
 from .. import metrics
+from ..colour import magma8, srgb8
 
 GAP = 4  # pixels of white between the panels of a triplet
 
@@ -16,19 +17,14 @@ GAP = 4  # pixels of white between the panels of a triplet
 def preview(image: Dict[str, np.ndarray]) -> np.ndarray:
     """(h, w, 3) uint8 sRGB of a rendered view; pixels that are not HIT are black (the
     colour the metrics compare). UNKNOWN pixels are marked magenta so holes show."""
-    rgb = metrics.srgb_encode(metrics.visible_colour(image))
-    out = (rgb * 255.0 + 0.5).astype(np.uint8)
+    out = srgb8(metrics.visible_colour(image))
     out[np.asarray(image["status"]) == metrics.STATUS_UNKNOWN] = (255, 0, 255)
     return out
 
 
 def heat_map(error: np.ndarray, vmax: float = 1.0) -> np.ndarray:
     """Per-pixel error in [0, vmax] → (h, w, 3) uint8 through matplotlib's magma colour map."""
-    import matplotlib
-
-    lut = (matplotlib.colormaps["magma"](np.linspace(0.0, 1.0, 256))[:, :3] * 255.0 + 0.5).astype(np.uint8)
-    v = np.clip(np.nan_to_num(np.asarray(error, dtype=np.float64) / vmax, nan=0.0), 0.0, 1.0)
-    return lut[(v * 255.0 + 0.5).astype(np.int64)]
+    return magma8(np.asarray(error, dtype=np.float64) / vmax)
 
 
 def side_by_side(panels: Sequence[np.ndarray]) -> np.ndarray:
