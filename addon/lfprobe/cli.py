@@ -161,11 +161,11 @@ def _cmd_import(package, args) -> int:
 
 
 def _grids(grid_module, scene, name):
-    """The grid named `name` (BatchError when there is none), or every grid of the scene by name."""
+    """The grid named `name` (GridError when there is none), or every grid of the scene by name."""
     if name:
         grid_obj = scene.objects.get(name)
         if grid_obj is None or not grid_module.is_grid(grid_obj):
-            raise BatchError(f"no probe grid named '{name}' in scene '{scene.name}'")
+            raise grid_module.GridError(f"no probe grid named '{name}' in scene '{scene.name}'")
         return [grid_obj]
     return sorted((o for o in scene.objects if grid_module.is_grid(o)), key=lambda o: o.name)
 
@@ -422,11 +422,8 @@ def main(argv=None) -> int:
     args = build_parser().parse_args(_arguments(sys.argv if argv is None else argv))
     try:
         package = _add_on_package()
-        user_errors = tuple(
-            getattr(_blender_module(package, module), name)
-            for module, name in (("probe_view", "TraceSetupError"), ("camera_export", "CameraExportError"),
-                                 ("compare", "CompareError"), ("mesh_export", "MeshExportError"))
-        )
+        # Every error the add-on reports about its input (GridError, TraceSetupError, ...).
+        user_errors = (importlib.import_module(f"{package.__name__}.core.errors").InputError,)
         native = importlib.import_module(f"{package.__name__}.core.native").load()
     except BatchError as error:
         print(f"lfprobe: error: {error}", file=sys.stderr)

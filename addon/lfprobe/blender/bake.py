@@ -17,6 +17,7 @@ from bpy.props import StringProperty
 
 from ..core import native, pipeline
 from ..core.atomic_write import replace_folder
+from ..core.errors import InputError
 from ..core.probe_set import MANIFEST, read_manifest, summarize
 from ..core.sources import default_cache_dir, describe_scan
 from . import grid as grid_module
@@ -25,7 +26,7 @@ from . import job_modal
 from .job_modal import NativeJobOperator
 
 
-class BakeInputError(ValueError):
+class BakeInputError(InputError):
     """The grid cannot be baked as it is; the message says why and what to do."""
 
 
@@ -39,17 +40,17 @@ def grid_job_running() -> bool:
 
 
 def grid_object(context, name: str = ""):
-    """The probe grid named `name`, else the active object; BakeInputError when it is not a grid."""
+    """The probe grid named `name`, else the active object; GridError when it is not a grid."""
     if name:
         obj = bpy.data.objects.get(name)
         if obj is None:
-            raise BakeInputError(f"no object named {name!r}")
+            raise grid_module.GridError(f"no object named {name!r}")
     else:
         obj = context.active_object
         if obj is None:
-            raise BakeInputError("no active object: select a probe grid to bake")
+            raise grid_module.GridError("no active object: select a probe grid to bake")
     if not grid_module.is_grid(obj):
-        raise BakeInputError(f"{obj.name!r} is not a probe grid")
+        raise grid_module.GridError(f"{obj.name!r} is not a probe grid")
     return obj
 
 
@@ -283,7 +284,7 @@ class LFPROBE_OT_bake(GridJobOperator, bpy.types.Operator):
         try:
             native.load()
             inputs = GridBake(context, grid_object(context, self.grid))
-        except (BakeInputError, grid_module.GridError, native.NativeModuleError) as error:
+        except (InputError, native.NativeModuleError) as error:
             self.report({"ERROR"}, f"Probe bake: {error}")
             return None
         self._inputs = inputs
@@ -376,7 +377,7 @@ class LFPROBE_OT_grid_apply_storage(bpy.types.Operator):
             _native = native.load()
             grid_obj = grid_object(context, self.grid)
             folder = probe_folder(grid_obj)
-        except (BakeInputError, native.NativeModuleError) as error:
+        except (InputError, native.NativeModuleError) as error:
             self.report({"ERROR"}, f"Apply storage: {error}")
             return {"CANCELLED"}
         before = set_memory(folder)

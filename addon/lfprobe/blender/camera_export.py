@@ -12,10 +12,12 @@ from __future__ import annotations
 import math
 from typing import Optional, Sequence
 
+from ..core.errors import InputError
+
 SUPPORTED_PANORAMA = "EQUIRECTANGULAR"
 
 
-class CameraExportError(ValueError):
+class CameraExportError(InputError):
     """A camera the native renderer cannot reproduce (the message says which and why)."""
 
 

@@ -23,14 +23,15 @@ from ..core.atomic_write import atomic_open
 from ..core.camera_json import write_camera
 from ..core.cli_compare import _strict_json, write_png
 from ..core.colour import magma8, srgb8
+from ..core.errors import InputError
 from . import camera_export, probe_view
 from .job_modal import NativeJobOperator
-from .mesh_export import MeshExportError, native_mesh_from_objects
+from .mesh_export import native_mesh_from_objects
 
 IMAGE_NAMES = {"ground_truth_preview": "LFP Ground Truth", "probes_preview": "LFP Probes", "error": "LFP FLIP Error"}
 
 
-class CompareError(ValueError):
+class CompareError(InputError):
     """A compare that cannot run as asked (the message says why)."""
 
 
@@ -232,8 +233,7 @@ class LFPROBE_OT_compare(NativeJobOperator, bpy.types.Operator):
             self._plan = ComparePlan(scene, context.evaluated_depsgraph_get(), references, out_dir,
                                      spp=self.spp)
             return self._plan.start_ground_truth()
-        except (CompareError, probe_view.TraceSetupError, camera_export.CameraExportError,
-                MeshExportError, OSError) as error:
+        except (InputError, OSError) as error:
             self.report({"ERROR"}, f"Compare: {error}")
             return None
         except Exception as error:  # native input errors (e.g. a mesh Embree refuses)

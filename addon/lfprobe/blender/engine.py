@@ -21,6 +21,7 @@ import numpy as np
 from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
 
 from ..core.colour import srgb_display_rgba
+from ..core.errors import InputError
 from . import camera_export, grid as grid_module, probe_view
 from .viewport import ProgressiveView
 
@@ -151,7 +152,7 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
         scene = depsgraph.scene
         try:
             image = self._trace_frame(scene, depsgraph)
-        except (probe_view.TraceSetupError, camera_export.CameraExportError) as error:
+        except InputError as error:
             self._fail(str(error))
             return
         except Exception as error:  # a native error, or a bug: reported, never raised into Blender
@@ -227,7 +228,7 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
         try:
             self._request_view(scene, region_data, width, height)
             self._view_error = None
-        except (probe_view.TraceSetupError, camera_export.CameraExportError) as error:
+        except InputError as error:
             self._view_error = str(error)
         message = self._view_error or self._view.error()
         if message:

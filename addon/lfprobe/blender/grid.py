@@ -10,11 +10,13 @@ import numpy as np
 from bpy.props import FloatProperty, IntProperty
 from mathutils import Vector
 
+from ..core.errors import InputError
+
 
 ROTATION_TOLERANCE = 1e-6
 
 
-class GridError(ValueError):
+class GridError(InputError):
     """A grid that cannot be baked or drawn as it is (the message says why)."""
 
 

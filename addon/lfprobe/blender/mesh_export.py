@@ -17,12 +17,13 @@ from typing import Iterable, List, Optional, Sequence
 import numpy as np
 
 from ..core import native
+from ..core.errors import InputError
 
 DEFAULT_BASE_COLOR = (0.8, 0.8, 0.8)  # Blender's default material colour
 _COLOR_NODES = {"VERTEX_COLOR", "ATTRIBUTE"}  # Color Attribute node (3.x/4.x), Attribute node
 
 
-class MeshExportError(ValueError):
+class MeshExportError(InputError):
     """Objects that cannot become a mesh for Embree (the message names the object)."""
 
 

@@ -21,6 +21,7 @@ from bpy.props import CollectionProperty, StringProperty
 
 from ..core import adaptive, native
 from ..core.atomic_write import replace_folder
+from ..core.errors import InputError
 from ..core.probe_set import read_manifest
 from . import bake
 from . import camera_export
@@ -37,7 +38,7 @@ STOP_WORDS = {
 }
 
 
-class ViewsError(ValueError):
+class ViewsError(InputError):
     """No views to place probes for (the message says what to select or set)."""
 
 
@@ -164,8 +165,7 @@ class LFPROBE_OT_place_for_views(bake.GridJobOperator, bpy.types.Operator):
             grid = grid_obj.lfprobe_grid
             cameras = view_cameras(context, grid, inputs.offset, [item.name for item in self.cameras])
             trace = probe_view.trace_settings(context.scene)
-        except (bake.BakeInputError, grid_module.GridError, native.NativeModuleError, ViewsError,
-                camera_export.CameraExportError) as error:
+        except (InputError, native.NativeModuleError) as error:
             self.report({"ERROR"}, f"Add probes for views: {error}")
             return None
         self._inputs = inputs

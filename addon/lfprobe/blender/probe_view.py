@@ -12,6 +12,7 @@ import threading
 from collections import OrderedDict
 
 from ..core import native
+from ..core.errors import InputError
 from ..core.probe_set import MANIFEST, read_manifest
 from . import grid as grid_module
 from . import scan_object
@@ -20,7 +21,7 @@ MODES = ("auto", "nearest", "grid")
 _FIELDS_KEPT = 2  # probe sets in memory at once (F12 and viewport usually share one)
 
 
-class TraceSetupError(ValueError):
+class TraceSetupError(InputError):
     """The scene cannot be traced as it is (the message says what to do)."""
 
 
@@ -30,22 +31,22 @@ def render_settings(scene):
 
 def grid_to_trace(scene, name: str = ""):
     """The grid to trace: the one named, else the scene's lfprobe_render.grid, else the
-    first baked grid (name order)."""
+    first baked grid (name order). Raises GridError when there is none."""
     if name:
         obj = scene.objects.get(name)
         if obj is None:
-            raise TraceSetupError(f"no object named '{name}' in scene '{scene.name}'")
+            raise grid_module.GridError(f"no object named '{name}' in scene '{scene.name}'")
         if not grid_module.is_grid(obj):
-            raise TraceSetupError(f"object '{name}' is not a light field probe grid")
+            raise grid_module.GridError(f"object '{name}' is not a light field probe grid")
         return obj
     chosen = render_settings(scene).grid
     if chosen is not None:
         if not grid_module.is_grid(chosen):
-            raise TraceSetupError(f"the render settings' grid '{chosen.name}' is not a light field probe grid")
+            raise grid_module.GridError(f"the render settings' grid '{chosen.name}' is not a light field probe grid")
         return chosen
     baked = grid_module.baked_grids(scene)
     if not baked:
-        raise TraceSetupError(
+        raise grid_module.GridError(
             f"scene '{scene.name}' has no baked probe grid: add a probe grid "
             "(Add > Light Field Probe Grid) and bake it"
         )

@@ -351,11 +351,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except OSError as error:
         print(f"lfprobe: error: {error}", file=sys.stderr)
         return 1
-    except Exception as error:  # the native Cancelled, and anything unexpected: no traceback wall
-        if type(error).__name__ == "Cancelled":
-            print("lfprobe: cancelled", file=sys.stderr)
-            return 130
-        raise
+    except native.cancelled_type():
+        print("lfprobe: cancelled", file=sys.stderr)
+        return 130
 
 
 if __name__ == "__main__":

@@ -8,11 +8,13 @@ import os
 import sys
 import sysconfig
 
+from .errors import LfprobeError
+
 _PACKAGE_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 _PACKAGE_NAME = __name__.rsplit(".", 2)[0]  # "lfprobe", or "bl_ext.<repo>.lfprobe"
 
 
-class NativeModuleError(ImportError):
+class NativeModuleError(LfprobeError, ImportError):
     """The native module is missing or was built for another Python."""
 
 
@@ -30,6 +32,19 @@ def _diagnose() -> str:
         f"{sys.version.split()[0]} needs {wanted}. Rebuild it with this Python "
         "(tools/setup.sh builds for the system Python 3.11 that Blender uses)."
     )
+
+
+def cancelled_type() -> type:
+    """The native module's Cancelled (a cancelled job), for an `except` clause; an exception type
+    that is never raised when the module cannot be loaded (nothing native ran to be cancelled)."""
+    try:
+        return load().Cancelled
+    except NativeModuleError:
+        return _NeverRaised
+
+
+class _NeverRaised(Exception):
+    pass
 
 
 def load():
