@@ -1,28 +1,18 @@
 """Compare: the probe-traced view of the active camera against Embree ground truth of chosen
-reference meshes, measured with lfprobe.core.metrics, written as a report folder and shown
-in the Image Editor.
-
-The report folder holds camera.json, ground_truth.exr, probes.exr (both in the native EXR
-format of `./lfprobe gt` and `./lfprobe render`), their sRGB previews ground_truth.png and
-probes.png, error_flip.png (the FLIP error, magma) and
-compare.json: the object `./lfprobe compare --json` prints for the two images, plus the
-camera, grid, reference objects and the time of each render.
+reference meshes. This module gathers the camera, grid, trace settings and reference meshes
+from the scene; lfprobe.core.compare.CompareReport renders, measures and writes the report
+folder (camera.json, ground_truth.exr, probes.exr, their PNG previews, error_flip.png and
+compare.json), whose previews are then shown in the Image Editor.
 """
 
 from __future__ import annotations
 
-import json
 import os
-import time
 
 import bpy
 from bpy.props import BoolProperty, IntProperty, StringProperty
 
-from ..core import metrics, native
-from ..core.atomic_write import atomic_open
-from ..core.camera_json import write_camera
-from ..core.cli_compare import _strict_json, write_png
-from ..core.colour import magma8, srgb8
+from ..core.compare import DEFAULT_PPD, CompareReport, check_samples_per_pixel
 from ..core.errors import InputError
 from . import camera_export, probe_view
 from .job_modal import NativeJobOperator
@@ -60,79 +50,40 @@ def default_report_dir() -> str:
     return bpy.path.abspath(f"//{stem}_compare")
 
 
-def _write_json(path: str, value) -> None:
-    with atomic_open(path) as stream:
-        json.dump(_strict_json(value), stream, indent=2, allow_nan=False)
-
-
 class ComparePlan:
     """Everything a compare needs, gathered from the scene before any rendering starts, so
-    that bad input is reported before time is spent."""
+    that bad input is reported before time is spent; core.compare.CompareReport renders,
+    measures and writes the report."""
 
     def __init__(self, scene, depsgraph, references, out_dir: str, camera_obj=None, grid_name: str = "",
-                 spp: int = 1, ppd: float = 67.0):
-        if spp < 1 or int(round(spp ** 0.5)) ** 2 != spp:
-            raise CompareError(f"samples per pixel must be 1 or a square (4, 9, 16, ...), not {spp}")
+                 spp: int = 1, ppd: float = DEFAULT_PPD):
+        check_samples_per_pixel(spp)
         self.grid = probe_view.grid_to_trace(scene, grid_name)
         self.folder = probe_view.probe_folder(self.grid)
         self.coarse_resolution = probe_view.coarse_resolution(self.grid)
         self.offset = probe_view.frame_offset(scene, self.grid)
-        self.camera = camera_export.camera_dict(scene, camera_obj, self.offset, depsgraph=depsgraph)
+        camera = camera_export.camera_dict(scene, camera_obj, self.offset, depsgraph=depsgraph)
         self.trace = probe_view.trace_settings(scene)
         self.references = [obj.name for obj in references]
         self.mesh = native_mesh_from_objects(references, depsgraph, world_offset=self.offset,
                                              name="compare references")
-        self.out_dir = os.path.abspath(out_dir)
-        os.makedirs(self.out_dir, exist_ok=True)
-        self.paths = {
-            "camera": os.path.join(self.out_dir, "camera.json"),
-            "ground_truth": os.path.join(self.out_dir, "ground_truth.exr"),
-            "probes": os.path.join(self.out_dir, "probes.exr"),
-            "error": os.path.join(self.out_dir, "error_flip.png"),
-            "ground_truth_preview": os.path.join(self.out_dir, "ground_truth.png"),
-            "probes_preview": os.path.join(self.out_dir, "probes.png"),
-            "report": os.path.join(self.out_dir, "compare.json"),
-        }
-        self.spp = spp
-        self.ppd = ppd
-        write_camera(self.paths["camera"], self.camera)
+        self.report = CompareReport(out_dir, camera, spp=spp, ppd=ppd)
+        self.paths = self.report.paths
+        self.report.write_camera()
 
     def start_ground_truth(self):
-        return native.load().start_ground_truth(self.mesh, json.dumps(self.camera), self.paths["ground_truth"],
-                                                spp=self.spp, threads=self.trace["threads"])
+        return self.report.start_ground_truth(self.mesh, threads=self.trace["threads"])
 
     def finish(self, gt_stats: dict) -> dict:
         """Traces the probes, measures against the ground truth, writes the report."""
-        _native = native.load()
         field = probe_view.load_field(self.folder, self.coarse_resolution)
-        # Matched filtering: the probes take the ground truth's samples per pixel.
-        _image, probe_stats = field.render(json.dumps(self.camera), output=self.paths["probes"], spp=self.spp,
-                                           **self.trace)
-        reference = _native.read_image(self.paths["ground_truth"])
-        test = _native.read_image(self.paths["probes"])
-        start = time.perf_counter()
-        result, error_map = metrics.compare_images_with_map(reference, test, ppd=self.ppd)
-        result["compare_seconds"] = time.perf_counter() - start
-        write_png(self.paths["error"], magma8(error_map))
-        for key, image in (("ground_truth_preview", reference), ("probes_preview", test)):
-            write_png(self.paths[key], srgb8(image["rgba"][..., :3]))  # alpha dropped: misses are black
-        result.update({
-            "reference": self.paths["ground_truth"],
-            "test": self.paths["probes"],
-            "error_map": self.paths["error"],
-            "ref_render_seconds": gt_stats.get("seconds"),
-            "test_render_seconds": probe_stats.get("seconds"),
-            "probe_rays_per_second": probe_stats.get("rays_per_second"),
-            "ground_truth_rays_per_second": gt_stats.get("rays_per_second"),
-            "camera": self.camera,
+        probe_stats = self.report.render_probes(field, self.trace)
+        return self.report.measure(gt_stats, probe_stats, {
             "grid": self.grid.name,
             "probe_set": self.folder,
             "reference_objects": self.references,
             "trace": self.trace,
-            "spp": self.spp,
         })
-        _write_json(self.paths["report"], result)
-        return result
 
 
 def run_compare(scene, depsgraph, references, out_dir: str, **options) -> dict:

@@ -2,8 +2,8 @@
 
 Compares a test view (probe render, splat) with a ground-truth view of the same camera:
 PSNR, SSIM, FLIP, depth AbsRel/RMSE and the HIT/MISS/UNKNOWN confusion, every figure defined in
-lfprobe.core.metrics. `add_parsers(subparsers)` adds the subcommand to the lfprobe parser;
-`python -m lfprobe.core.cli_compare ...` runs it on its own. Exit status 2 for a missing or
+lfprobe.core.metrics and measured by lfprobe.core.compare. `add_parsers(subparsers)` adds the
+subcommand to the lfprobe parser; `python -m lfprobe.core.cli_compare ...` runs it on its own. Exit status 2 for a missing or
 unreadable file or images of different sizes.
 """
 
@@ -11,53 +11,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
-import os
-import struct
-import time
-import zlib
-from typing import Dict, Optional
+from typing import Dict
 
-import numpy as np
-
-from . import metrics, native
-from .atomic_write import atomic_open
-from .colour import magma8
-
-
-def _read(path: str) -> Dict[str, object]:
-    if not os.path.isfile(path):
-        raise FileNotFoundError(f"no such image: {path}")
-    try:
-        return native.load().read_image(path)
-    except native.NativeModuleError:
-        raise
-    except Exception as error:  # the native reader's own error types
-        raise ValueError(f"cannot read {path}: {error}") from error
-
-
-def _render_seconds(image: Dict[str, object]) -> Optional[float]:
-    """The renderer's own time for the image, when its metadata records one."""
-    try:
-        stats = json.loads(image.get("metadata") or "{}").get("stats", {})
-        seconds = stats.get("seconds")
-        return float(seconds) if seconds is not None else None
-    except (ValueError, AttributeError, TypeError):
-        return None
-
-
-def write_png(path: str, rgb8: np.ndarray) -> None:
-    """Writes an (h, w, 3) uint8 image as an 8-bit RGB PNG (zlib, no filtering)."""
-    h, w = rgb8.shape[:2]
-    raw = b"".join(b"\x00" + rgb8[y].tobytes() for y in range(h))
-
-    def chunk(tag: bytes, data: bytes) -> bytes:
-        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", zlib.crc32(tag + data) & 0xFFFFFFFF)
-
-    header = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)
-    with atomic_open(path, "wb") as f:
-        f.write(b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", header) + chunk(b"IDAT", zlib.compress(raw, 6))
-                + chunk(b"IEND", b""))
+from .compare import compare_files
+from .json_values import strict_json
 
 
 def _fmt(value, spec: str, unit: str = "") -> str:
@@ -98,34 +55,10 @@ def _print_table(ref_path: str, test_path: str, r: Dict[str, object]) -> None:
             print(f"  {key.replace('_', ' ')}: {r[key] * 1000:.1f} ms")
 
 
-def _strict_json(value):
-    """Non-finite numbers become null, so that any JSON parser reads the output (PSNR of
-    identical images is infinite: null)."""
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {k: _strict_json(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_strict_json(v) for v in value]
-    return value
-
-
 def _cmd_compare(args) -> int:
-    if args.ppd <= 0:
-        raise ValueError(f"--ppd must be positive, got {args.ppd}")
-    ref = _read(args.reference)
-    test = _read(args.test)
-    start = time.perf_counter()
-    result, error_map = metrics.compare_images_with_map(ref, test, ppd=args.ppd)
-    result["compare_seconds"] = time.perf_counter() - start
-    result["reference"], result["test"] = os.path.abspath(args.reference), os.path.abspath(args.test)
-    result["ref_render_seconds"] = _render_seconds(ref)
-    result["test_render_seconds"] = _render_seconds(test)
-    if args.error_map:
-        write_png(args.error_map, magma8(error_map))
-        result["error_map"] = os.path.abspath(args.error_map)
+    result = compare_files(args.reference, args.test, ppd=args.ppd, error_map_path=args.error_map)
     if args.json:
-        print(json.dumps(_strict_json(result), indent=2, allow_nan=False))
+        print(json.dumps(strict_json(result), indent=2, allow_nan=False))
     else:
         _print_table(args.reference, args.test, result)
         if args.error_map:

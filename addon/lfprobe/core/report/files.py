@@ -6,11 +6,11 @@ from __future__ import annotations
 import csv
 import io
 import json
-import math
 import os
 from typing import Dict, Iterable, List
 
 from .. import atomic_write
+from ..json_values import strict_json
 
 
 def write_bytes(path: str, data: bytes) -> None:
@@ -20,19 +20,6 @@ def write_bytes(path: str, data: bytes) -> None:
 
 def write_text(path: str, text: str) -> None:
     write_bytes(path, text.encode("utf-8"))
-
-
-def strict_json(value):
-    """Non-finite floats become null (JSON has no inf/NaN); numpy scalars become Python ones."""
-    if hasattr(value, "item") and not isinstance(value, (list, dict, str)):
-        value = value.item()
-    if isinstance(value, float) and not math.isfinite(value):
-        return None
-    if isinstance(value, dict):
-        return {str(k): strict_json(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [strict_json(v) for v in value]
-    return value
 
 
 def write_json(path: str, value) -> None:
