@@ -9,16 +9,16 @@ changes it on a baked set without a rebake, as the probe files keep full precisi
 import json
 import os
 import shutil
-from typing import Optional
 
 import bpy
-import numpy as np
 from bpy.props import StringProperty
 
 from ..core import native, pipeline
 from ..core.atomic_write import replace_folder
+from ..core.cloud_transform import to_world, transform_scans
 from ..core.errors import InputError
-from ..core.probe_set import MANIFEST, read_manifest, summarize
+from ..core import probe_storage
+from ..core.probe_set import read_manifest
 from ..core.sources import default_cache_dir, describe_scan
 from . import grid as grid_module
 from . import scan_object
@@ -52,10 +52,6 @@ def grid_object(context, name: str = ""):
     if not grid_module.is_grid(obj):
         raise grid_module.GridError(f"{obj.name!r} is not a probe grid")
     return obj
-
-
-def _is_identity(matrix) -> bool:
-    return all(abs(matrix[r][c] - (1.0 if r == c else 0.0)) < 1e-9 for r in range(4) for c in range(4))
 
 
 def gather_sources(grid_obj):
@@ -108,32 +104,6 @@ def probe_folder(grid_obj) -> str:
     return grid_module.probe_dir_abspath(grid_obj)
 
 
-def _scan_cloud(loaded, scans):
-    """The loaded cloud moved by the scan objects' transforms, when any is moved."""
-    matrices = [obj.matrix_world for obj in scans]
-    if all(_is_identity(m) for m in matrices):
-        return loaded
-    _native = native.load()
-    positions = loaded.positions.astype(np.float64)
-    scan_index = loaded.scan_index
-    file_owner = [i for i, obj in enumerate(scans) for _ in obj.lfprobe_scan.paths()]
-    owner_of_point = np.asarray(file_owner, dtype=np.int64)[scan_index]
-    scanners = []
-    for file_index, scan in enumerate(loaded.scans):
-        matrix = np.array(matrices[file_owner[file_index]], dtype=np.float64)
-        members = owner_of_point == file_owner[file_index]
-        positions[members] = positions[members] @ matrix[:3, :3].T + matrix[:3, 3]
-        scanner = scan["scanner"]
-        scanners.append(None if scanner is None else list(matrix[:3, :3] @ np.asarray(scanner) + matrix[:3, 3]))
-    return _native.PointCloud.from_arrays(
-        positions.astype(np.float32),
-        colors=loaded.colors,
-        scan_index=scan_index,
-        scanners=scanners,
-        world_offset=list(loaded.world_offset),
-    )
-
-
 class GridBake:
     """What baking a grid takes, read from the grid and checked before any work starts (Bake and
     Add Probes for Views share it): the sources, the probe folder and its staging folder, the
@@ -147,10 +117,10 @@ class GridBake:
         frame = shared_scan_offset(self.scans) if self.scans else scan_object.frame_offset(context.scene)
         self.grid_name = grid_obj.name
         self.staging = self.folder.rstrip(os.sep) + ".baking"
-        self.offset = np.asarray(frame if frame is not None else (0.0, 0.0, 0.0), dtype=float)
+        self.offset = tuple(float(v) for v in (frame if frame is not None else (0.0, 0.0, 0.0)))
         grid = grid_obj.lfprobe_grid
         self.placement = pipeline.ProbePlacementSpec(
-            grid_min=list(low + self.offset), grid_max=list(high + self.offset), counts=list(grid.counts)
+            grid_min=to_world(low, self.offset), grid_max=to_world(high, self.offset), counts=list(grid.counts)
         )
         storage, distance_step = grid.storage_choice()
         self.options = pipeline.BakeOptions(resolution=grid.resolution, storage=storage, distance_step=distance_step)
@@ -160,6 +130,9 @@ class GridBake:
                                  "min_resolution": min(64, int(grid.resolution))}
         self.paths = [p for obj in self.scans for p in obj.lfprobe_scan.paths()]
         self.scanners = [s for obj in self.scans for s in obj.lfprobe_scan.scanners()]
+        # Each file's transform: the matrix of the scan object it belongs to.
+        self.file_matrices = [[list(row) for row in obj.matrix_world] for obj in self.scans
+                              for _ in obj.lfprobe_scan.paths()]
 
     def start_load(self):
         """The native job that reads the scans' full clouds (through the parse cache)."""
@@ -172,9 +145,9 @@ class GridBake:
 
     def cloud_and_sources(self, loaded):
         """(the cloud to bake, moved by the scan objects' transforms; the manifest's sources)."""
-        cloud = _scan_cloud(loaded, self.scans)
+        cloud = transform_scans(loaded, self.file_matrices)
         sources = [
-            describe_scan(path, scan["points"], None if scan["scanner"] is None else list(np.add(scan["scanner"], self.offset)))
+            describe_scan(path, scan["points"], None if scan["scanner"] is None else to_world(scan["scanner"], self.offset))
             for path, scan in zip(self.paths, loaded.scans)
         ]
         return cloud, sources
@@ -191,70 +164,9 @@ def show_baked_set(grid, manifest: dict, base_probes: int = -1) -> None:
     grid.baked = True
 
 
-def storage_name(storage: Optional[dict]) -> str:
-    """"full", "compact" or "custom" for a manifest's "storage" dict (none: full, as it loads)."""
-    storage = storage or {}
-    radiance, normal = storage.get("radiance", "half"), storage.get("normal", "half")
-    step, confidence = float(storage.get("distance_step") or 0.0), storage.get("confidence", True)
-    if radiance == "half" and normal == "half" and step == 0.0 and confidence:
-        return "full"
-    if radiance == "srgb8" and normal == "oct16" and step > 0.0 and not confidence:
-        return "compact"
-    return "custom"
-
-
-# The panel asks on every redraw: one summary per folder, read again when its manifest changes.
-_set_memory: dict = {}
-
-
-def set_memory(folder: str) -> Optional[dict]:
-    """How the finished probe set in `folder` loads, from its manifest: {"memory_bytes" (maps and
-    coarse levels), "storage" (the manifest's dict), "name" (storage_name), "bytes_per_texel",
-    "distance_step"}; None when there is no readable set."""
-    try:
-        stat = os.stat(os.path.join(folder, MANIFEST))
-    except OSError:
-        return None
-    stamp = (stat.st_mtime_ns, stat.st_size, stat.st_ino)  # a rewrite renames a new file in
-    cached = _set_memory.get(folder)
-    if cached is not None and cached[0] == stamp:
-        return cached[1]
-    try:
-        info = summarize(folder)
-    except (OSError, ValueError, KeyError, TypeError):
-        return None
-    probe = info["probes"][0] if info["probes"] else None
-    facts = {
-        "memory_bytes": int(info["memory_bytes"]),
-        "storage": info["storage"] or {},
-        "name": storage_name(info["storage"]),
-        # The manifest's per-probe bytes are its maps alone: N² texels of this many bytes.
-        "bytes_per_texel": round(int(probe.get("memory_bytes", 0)) / int(probe["resolution"]) ** 2) if probe else 0,
-        "distance_step": float((info["storage"] or {}).get("distance_step") or 0.0),
-    }
-    _set_memory[folder] = (stamp, facts)
-    return facts
-
-
 def memory_text(folder: str) -> str:
-    """E.g. "1.23 MiB in memory (compact: 7 bytes a texel, 1 mm distance steps)"."""
-    facts = set_memory(folder)
-    if facts is None:
-        return "no probe set"
-    detail = f"{facts['bytes_per_texel']} bytes a texel"
-    if facts["distance_step"] > 0.0:
-        detail += f", {facts['distance_step'] * 1000:g} mm distance steps"
-    return f"{facts['memory_bytes'] / 2**20:.2f} MiB in memory ({facts['name']}: {detail})"
-
-
-def storage_matches(grid, facts: Optional[dict]) -> bool:
-    """Whether the set described by `facts` (set_memory) loads as the grid's Storage says."""
-    if facts is None:
-        return True
-    storage, step = grid.storage_choice()
-    if facts["name"] != storage:
-        return False
-    return storage == "full" or abs(facts["distance_step"] - step) <= 1e-6 * step
+    """What the grid's panel and reports say about how the set in `folder` loads (probe_storage.memory_text)."""
+    return probe_storage.memory_text(probe_storage.loaded_storage(folder))
 
 
 class GridJobOperator(NativeJobOperator):
@@ -380,7 +292,7 @@ class LFPROBE_OT_grid_apply_storage(bpy.types.Operator):
         except (InputError, native.NativeModuleError) as error:
             self.report({"ERROR"}, f"Apply storage: {error}")
             return {"CANCELLED"}
-        before = set_memory(folder)
+        before = probe_storage.loaded_storage(folder)
         if before is None:
             self.report({"ERROR"}, f"Apply storage: grid {grid_obj.name!r} has no baked probe set in {folder}: "
                                    "bake it first")

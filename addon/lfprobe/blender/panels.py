@@ -9,8 +9,7 @@ import textwrap
 
 import bpy
 
-from ..core import native
-from . import bake
+from ..core import native, probe_storage
 from . import grid as grid_module
 from . import place_views
 
@@ -74,12 +73,12 @@ def _draw_storage(layout, obj) -> None:
     """The baked set's memory as its manifest says it loads, and Apply Storage when that is
     not the grid's Storage (changed since the bake, or by ./lfprobe store)."""
     folder = grid_module.probe_dir_abspath(obj)
-    facts = bake.set_memory(folder)
+    facts = probe_storage.loaded_storage(folder)
     if facts is None:
         layout.label(text=f"No probe set in {folder}", icon="ERROR")
         return
-    layout.label(text=f"Loads {bake.memory_text(folder)}", icon="MEMORY")
-    if not bake.storage_matches(obj.lfprobe_grid, facts):
+    layout.label(text=f"Loads {probe_storage.memory_text(facts)}", icon="MEMORY")
+    if not probe_storage.storage_matches(facts, *obj.lfprobe_grid.storage_choice()):
         layout.label(text=f"The set loads {facts['name']}, not as Storage says", icon="INFO")
         layout.operator("object.lfprobe_grid_apply_storage", icon="FILE_REFRESH").grid = obj.name
 

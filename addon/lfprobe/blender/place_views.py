@@ -16,11 +16,11 @@ import os
 import shutil
 
 import bpy
-import numpy as np
 from bpy.props import CollectionProperty, StringProperty
 
 from ..core import adaptive, native
 from ..core.atomic_write import replace_folder
+from ..core.cloud_transform import to_local
 from ..core.errors import InputError
 from ..core.probe_set import read_manifest
 from . import bake
@@ -105,7 +105,7 @@ def placement_record(result, cameras: list, offset, target_unknown: float, budge
         "views": [camera.get("name", "") for camera in cameras],
         "base_probes": result.base_probes,
         "added": [{
-            "position": [float(v) for v in np.subtract(added["position"], offset)],
+            "position": to_local(added["position"], offset),
             "view": cameras[added["view"]].get("name", ""),
             "resolution": int(added["resolution"]),
             "memory_bytes": int(added["memory_bytes"]),

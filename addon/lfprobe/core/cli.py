@@ -16,6 +16,7 @@ from typing import List, Optional, Sequence
 from . import cli_compare, cli_mesh, cli_place, cli_report, cli_storage, native
 from .pipeline import BakeOptions, ProbePlacementSpec, bake_from_scans
 from .probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
+from .probe_storage import describe as describe_storage
 from .progress import TerminalProgress
 
 
@@ -95,7 +96,7 @@ def _print_bake_summary(args, summary: dict, source: str) -> int:
             f"{_mib(summary['bytes_on_disk'] / n)} on disk"
         )
     if summary.get("storage"):
-        print(f"  storage: {cli_storage.describe(summary['storage'])}")
+        print(f"  storage: {describe_storage(summary['storage'])}")
     return 0
 
 
@@ -121,7 +122,7 @@ def _cmd_info(args) -> int:
         f"unknown {100 * c['unknown']:.2f}%, empty {100 * c['empty']:.2f}%"
     )
     if info.get("storage"):
-        print(f"  storage in memory: {cli_storage.describe(info['storage'])}")
+        print(f"  storage in memory: {describe_storage(info['storage'])}")
     per = info["memory_bytes_per_probe"]
     print(
         f"  memory: {_mib(info['memory_bytes'])} ({_mib(per)} per probe with coarse levels); "

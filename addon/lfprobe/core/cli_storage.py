@@ -1,6 +1,6 @@
 """How a probe set loads into memory, on the command line: the --storage / --distance-step
-options of bake, place and render, the `store` subcommand, and one line describing a
-manifest's "storage" (see native probe_storage.hpp)."""
+options of bake, place and render and the `store` subcommand (a manifest's "storage" is
+decoded in probe_storage.py)."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import json
 
 from . import native
 from .probe_set import summarize
+from .probe_storage import describe
 
 DISTANCE_STEP_HELP = ("compact storage: distance quantum in metres (default 0.001, half the ~2 mm "
                       "range noise of a FARO-class scanner at 10 m)")
@@ -22,21 +23,6 @@ def bake_storage(args):
     """The storage a bake records: the one asked for, else compact for --auto (it models only
     what the data carries, in memory too), else the manifest's default (None: full)."""
     return args.storage or ("compact" if getattr(args, "auto", False) else None)
-
-
-def describe(storage: dict) -> str:
-    """One line for a manifest's "storage" dict."""
-    step = storage.get("distance_step") or 0.0
-    if storage.get("radiance") == "half" and storage.get("normal") == "half" and not step:
-        return "full (half RGBA, float32 distance, half normals)"
-    distance = f"16-bit distance in {step * 1000:g} mm steps" if step else "float32 distance"
-    parts = [f"{storage.get('radiance')} radiance", distance, f"{storage.get('normal')} normals"]
-    if not storage.get("confidence", True):
-        parts.append("no confidence")
-    text = ", ".join(parts)
-    if "bytes_per_texel" in storage:
-        text += f" ({storage['bytes_per_texel']} bytes a texel)"
-    return text
 
 
 def _cmd_store(args) -> int:
