@@ -265,16 +265,11 @@ def _cmd_place(package, args) -> int:
 
 
 def _cmd_render(package, args) -> int:
-    camera_export = _blender_module(package, "camera_export")
     probe_view = _blender_module(package, "probe_view")
     scene = _scene(args.scene)
     camera_obj = _camera(scene, args.camera)
-    grid_obj = probe_view.grid_to_trace(scene, args.grid)
-    folder = probe_view.probe_folder(grid_obj)
-    offset = probe_view.frame_offset(scene, grid_obj)
-    camera = camera_export.camera_dict(scene, camera_obj, offset, depsgraph=_depsgraph(scene))
-    trace = probe_view.trace_settings(scene)
-    trace["spp"] = probe_view.pixel_samples(scene)
+    target = probe_view.trace_target(scene, args.grid, camera_obj=camera_obj, depsgraph=_depsgraph(scene))
+    trace = dict(target.trace, spp=target.spp)
     for option in ("mode", "thickness", "threads", "spp", "filter", "blend"):
         value = getattr(args, option)
         if value is not None:
@@ -283,12 +278,11 @@ def _cmd_render(package, args) -> int:
     if not os.path.isdir(os.path.dirname(out)):
         raise BatchError(f"--out {args.out}: the folder {os.path.dirname(out)} does not exist")
     if args.camera_json:
-        importlib.import_module(f"{package.__name__}.core.camera_json").write_camera(args.camera_json, camera)
-    field = probe_view.load_field(folder, probe_view.coarse_resolution(grid_obj))
-    _image, stats = field.render(json.dumps(camera), output=out, **trace)
+        importlib.import_module(f"{package.__name__}.core.camera_json").write_camera(args.camera_json, target.camera)
+    _image, stats = target.load_field().render(json.dumps(target.camera), output=out, **trace)
     rays = max(int(stats["rays"]), 1)
     pixels = max(int(stats["hits"] + stats["misses"] + stats["unknown"]), 1)
-    print(f"lfprobe: rendered {out} from camera '{camera_obj.name}' through grid '{grid_obj.name}': "
+    print(f"lfprobe: rendered {out} from camera '{camera_obj.name}' through grid '{target.grid_name}': "
           f"{rays:,} rays in {stats['seconds'] * 1000:.1f} ms ({stats['rays_per_second'] / 1e6:.2f} M rays/s), "
           f"pixels HIT {100 * stats['hits'] / pixels:.2f}%, UNKNOWN {100 * stats['unknown'] / pixels:.2f}%")
     return EXIT_OK

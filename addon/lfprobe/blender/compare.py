@@ -14,7 +14,7 @@ from bpy.props import BoolProperty, IntProperty, StringProperty
 
 from ..core.compare import DEFAULT_PPD, CompareReport, check_samples_per_pixel
 from ..core.errors import InputError
-from . import camera_export, probe_view
+from . import probe_view
 from .job_modal import NativeJobOperator
 from .mesh_export import native_mesh_from_objects
 
@@ -58,16 +58,12 @@ class ComparePlan:
     def __init__(self, scene, depsgraph, references, out_dir: str, camera_obj=None, grid_name: str = "",
                  spp: int = 1, ppd: float = DEFAULT_PPD):
         check_samples_per_pixel(spp)
-        self.grid = probe_view.grid_to_trace(scene, grid_name)
-        self.folder = probe_view.probe_folder(self.grid)
-        self.coarse_resolution = probe_view.coarse_resolution(self.grid)
-        self.offset = probe_view.frame_offset(scene, self.grid)
-        camera = camera_export.camera_dict(scene, camera_obj, self.offset, depsgraph=depsgraph)
-        self.trace = probe_view.trace_settings(scene)
+        self.target = probe_view.trace_target(scene, grid_name, camera_obj=camera_obj, depsgraph=depsgraph)
+        self.trace = self.target.trace
         self.references = [obj.name for obj in references]
-        self.mesh = native_mesh_from_objects(references, depsgraph, world_offset=self.offset,
+        self.mesh = native_mesh_from_objects(references, depsgraph, world_offset=self.target.offset,
                                              name="compare references")
-        self.report = CompareReport(out_dir, camera, spp=spp, ppd=ppd)
+        self.report = CompareReport(out_dir, self.target.camera, spp=spp, ppd=ppd)
         self.paths = self.report.paths
         self.report.write_camera()
 
@@ -76,11 +72,10 @@ class ComparePlan:
 
     def finish(self, gt_stats: dict) -> dict:
         """Traces the probes, measures against the ground truth, writes the report."""
-        field = probe_view.load_field(self.folder, self.coarse_resolution)
-        probe_stats = self.report.render_probes(field, self.trace)
+        probe_stats = self.report.render_probes(self.target.load_field(), self.trace)
         return self.report.measure(gt_stats, probe_stats, {
-            "grid": self.grid.name,
-            "probe_set": self.folder,
+            "grid": self.target.grid_name,
+            "probe_set": self.target.folder,
             "reference_objects": self.references,
             "trace": self.trace,
         })

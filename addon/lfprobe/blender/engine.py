@@ -22,7 +22,8 @@ from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
 
 from ..core.colour import srgb_display_rgba
 from ..core.errors import InputError
-from . import camera_export, grid as grid_module, probe_view
+from ..core.trace_target import forget_fields
+from . import grid as grid_module, probe_view
 from .viewport import ProgressiveView
 
 TRACE_PASSES = (("LFP Status", "status"), ("LFP Probe", "probe"), ("LFP Steps", "steps"))
@@ -162,19 +163,15 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
         self._write_result(depsgraph, image)
 
     def _trace_frame(self, scene, depsgraph):
-        grid_obj = probe_view.grid_to_trace(scene)
-        folder = probe_view.probe_folder(grid_obj)
-        offset = probe_view.frame_offset(scene, grid_obj)
-        camera = camera_export.camera_dict(scene, scene.camera, offset, depsgraph=depsgraph)
-        self.update_stats("", f"Light Field Probes: loading {grid_obj.name}")
-        field = probe_view.load_field(folder, probe_view.coarse_resolution(grid_obj))
+        target = probe_view.trace_target(scene, depsgraph=depsgraph)
+        self.update_stats("", f"Light Field Probes: loading {target.grid_name}")
+        field = target.load_field()
         if self.test_break():
             return None
-        width, height = camera["resolution"]
+        width, height = target.camera["resolution"]
         self.update_stats("", f"Light Field Probes: tracing {width}×{height} through {field.probe_count} probes")
         # In the background, so that Esc (test_break) stops the trace mid-frame.
-        job = field.start_render(json.dumps(camera), spp=probe_view.pixel_samples(scene),
-                                 **probe_view.trace_settings(scene))
+        job = field.start_render(json.dumps(target.camera), spp=target.spp, **target.trace)
         while not job.wait(0.1):
             if self.test_break():
                 job.cancel()
@@ -247,14 +244,10 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
                                   f"{last.since_request * 1000:.0f} ms")
 
     def _request_view(self, scene, region_data, width, height) -> None:
-        grid_obj = probe_view.grid_to_trace(scene)
-        folder = probe_view.probe_folder(grid_obj)
-        offset = probe_view.frame_offset(scene, grid_obj)
-        camera = camera_export.viewport_camera_dict(region_data, width, height, offset)
-        field = probe_view.load_field(folder, probe_view.coarse_resolution(grid_obj))
-        trace = probe_view.trace_settings(scene)
-        key = (json.dumps(camera, sort_keys=True), id(field), tuple(sorted(trace.items())))
-        self._view.request(field, camera, width, height, trace, key)
+        target = probe_view.trace_target(scene, viewport=(region_data, width, height))
+        field = target.load_field()
+        key = (json.dumps(target.camera, sort_keys=True), id(field), tuple(sorted(target.trace.items())))
+        self._view.request(field, target.camera, width, height, target.trace, key)
 
     def _draw_image(self, scene, view_image, width, height) -> None:
         import gpu
@@ -330,4 +323,4 @@ def unregister():
         panel.COMPAT_ENGINES.discard(LFProbeRenderEngine.bl_idname)
     del bpy.types.Scene.lfprobe_render
     _unregister_classes()
-    probe_view.forget_fields()
+    forget_fields()

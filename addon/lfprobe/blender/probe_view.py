@@ -1,28 +1,20 @@
-"""What a scene is traced through: which baked grid, where its probe set lies, the frame
-offset between Blender and the probe set's world, and the loaded ProbeField (cached by
-folder and manifest time, so F12, the viewport and compare share one load).
-
-Used by the render engine, compare and the batch CLI; bpy is only read, never changed.
+"""What a scene is traced through, gathered into a core TraceTarget (`trace_target`): which
+baked grid, where its probe set lies, the frame offset between Blender and the probe set's
+world, the camera and the render settings. The render engine (F12 and viewport), compare and
+the batch CLI all start here; bpy is only read, never changed.
 """
 
 from __future__ import annotations
 
 import os
-import threading
-from collections import OrderedDict
 
-from ..core import native
-from ..core.errors import InputError
-from ..core.probe_set import MANIFEST, read_manifest
+from ..core.probe_set import read_manifest
+from ..core.trace_target import TraceSetupError, TraceTarget, load_field  # noqa: F401  (importable here)
+from . import camera_export
 from . import grid as grid_module
 from . import scan_object
 
 MODES = ("auto", "nearest", "grid")
-_FIELDS_KEPT = 2  # probe sets in memory at once (F12 and viewport usually share one)
-
-
-class TraceSetupError(InputError):
-    """The scene cannot be traced as it is (the message says what to do)."""
 
 
 def render_settings(scene):
@@ -80,46 +72,9 @@ def frame_offset(scene, grid_obj=None) -> tuple:
     return tuple(offset) if offset is not None else (0.0, 0.0, 0.0)
 
 
-_fields: "OrderedDict[tuple, object]" = OrderedDict()
-_fields_lock = threading.Lock()
-
-
 def coarse_resolution(grid_obj) -> int:
     """The grid's coarsest min-distance level kept when its probes are loaded (0: all)."""
     return int(grid_obj.lfprobe_grid.coarse_resolution) if grid_obj is not None else 0
-
-
-def load_field(folder: str, coarse_resolution: int = 0):
-    """The ProbeField of `folder`, loaded once per version of its manifest and coarse level."""
-    manifest = os.path.join(folder, MANIFEST)
-    try:
-        stat = os.stat(manifest)
-    except OSError as error:
-        raise TraceSetupError(f"{manifest}: cannot read the probe set manifest ({error.strerror})") from error
-    key = (os.path.abspath(folder), stat.st_mtime_ns, stat.st_size, int(coarse_resolution))
-    with _fields_lock:
-        field = _fields.get(key)
-        if field is not None:
-            _fields.move_to_end(key)
-            return field
-        _native = native.load()
-        try:
-            field = _native.ProbeField.load(folder, coarse_resolution=int(coarse_resolution))
-        except (_native.InputError, _native.NativeIOError) as error:
-            raise TraceSetupError(f"cannot load the probe set {folder}: {error}") from error
-        stale = [k for k in _fields if k[0] == key[0]]
-        for k in stale:
-            del _fields[k]
-        _fields[key] = field
-        while len(_fields) > _FIELDS_KEPT:
-            _fields.popitem(last=False)
-        return field
-
-
-def forget_fields() -> None:
-    """Drops the cached probe sets (add-on unregistered, memory wanted back)."""
-    with _fields_lock:
-        _fields.clear()
 
 
 def trace_settings(scene) -> dict:
@@ -133,3 +88,20 @@ def pixel_samples(scene) -> int:
     """Rays per pixel of a final render (F12, Compare, the batch render): the scene's n×n."""
     n = int(render_settings(scene).samples)
     return n * n
+
+
+def trace_target(scene, grid_name: str = "", camera_obj=None, depsgraph=None, viewport=None) -> TraceTarget:
+    """What tracing the scene takes: the grid named (else the render settings', else the first
+    baked), its probe set, the frame offset, the camera (`camera_obj`, default the scene camera,
+    evaluated in `depsgraph`; or the 3D view `viewport` = (region_data, width, height)) and the
+    scene's trace settings. Raises GridError, TraceSetupError or CameraExportError."""
+    grid_obj = grid_to_trace(scene, grid_name)
+    folder = probe_folder(grid_obj)
+    offset = frame_offset(scene, grid_obj)
+    if viewport is not None:
+        region_data, width, height = viewport
+        camera = camera_export.viewport_camera_dict(region_data, width, height, offset)
+    else:
+        camera = camera_export.camera_dict(scene, camera_obj, offset, depsgraph=depsgraph)
+    return TraceTarget(grid_name=grid_obj.name, folder=folder, coarse_resolution=coarse_resolution(grid_obj),
+                       offset=tuple(offset), camera=camera, trace=trace_settings(scene), spp=pixel_samples(scene))
