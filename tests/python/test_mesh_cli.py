@@ -8,8 +8,8 @@ import os
 import pytest
 
 from conftest import SHARED_DATA
-from lfprobe.core import cli, cli_mesh, native
-from lfprobe.core.pipeline import BakeOptions, ProbePlacementSpec
+from lfprobe.core import cli, native
+from lfprobe.core.pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh
 
 DATA = os.path.join(SHARED_DATA, "meshes")
 CORNELL = os.path.join(DATA, "cornell_box", "CornellBox-Original.obj")
@@ -54,7 +54,7 @@ def test_scan_and_bake(tmp_path):
     cloud = _native.load_scans([xyz], cache_dir="")
     assert len(cloud) > 1000
     assert cloud.scans[0]["scanner"] is not None
-    summary = cli_mesh.bake_from_mesh(
+    summary = bake_from_mesh(
         [CORNELL], str(tmp_path / "probes"), ProbePlacementSpec(positions=[(0.0, 1.0, 0.0)]),
         BakeOptions(resolution=32),
     )

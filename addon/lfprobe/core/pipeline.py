@@ -8,7 +8,7 @@ from typing import Callable, Optional, Sequence
 
 from . import native
 from .probe_set import read_manifest
-from .sources import default_cache_dir, describe_scan
+from .sources import default_cache_dir, describe_mesh, describe_scan
 
 Progress = Optional[Callable[[float, str], object]]
 
@@ -168,4 +168,37 @@ def bake_from_scans(
     summary = bake_from_cloud(cloud, out_dir, placement, options, sources, progress)
     summary["points"] = len(cloud)
     summary["world_offset"] = list(cloud.world_offset)
+    return summary
+
+
+def bake_from_mesh(
+    mesh_paths: Sequence[str],
+    out_dir: str,
+    placement: ProbePlacementSpec,
+    options: BakeOptions,
+    progress: Progress = None,
+    start_only: bool = False,
+):
+    """Mesh file → probe set folder, baked with Embree (exact distances, normals, base colour).
+    One mesh file is supported per bake. options.extra may hold "supersample" (n×n rays per
+    texel for the colour; left out: the native default). Returns the summary dict, or the running Job with start_only."""
+    if len(mesh_paths) != 1:
+        raise ValueError(f"bake --mesh takes one mesh file, got {len(mesh_paths)}")
+    placement.validate()
+    _native = native.load()
+    mesh = _native.load_mesh(str(mesh_paths[0]))
+    sources = [describe_mesh(mesh_paths[0], mesh.triangle_count)]
+    job = _native.start_bake_probe_set_from_mesh(
+        mesh,
+        out_dir,
+        resolution=int(options.resolution),
+        **placement.native_kwargs(),
+        sources_json=json.dumps(sources),
+        **({"supersample": int(options.extra["supersample"])} if options.extra.get("supersample") else {}),
+    )
+    if start_only:
+        return job
+    summary = job.run(progress)
+    summary["triangles"] = mesh.triangle_count
+    apply_storage(out_dir, summary, options)
     return summary

@@ -35,3 +35,14 @@ def default_cache_dir() -> str:
         return os.environ["LFPROBE_CACHE"]
     base = os.environ.get("XDG_CACHE_HOME") or os.path.join(os.path.expanduser("~"), ".cache")
     return os.path.join(base, "lfprobe", "scans")
+
+
+def describe_mesh(path: str, triangles: int) -> dict:
+    """The manifest's record of one mesh file (like sources.describe_scan)."""
+    return {
+        "kind": "mesh",
+        "path": os.path.abspath(path),
+        "bytes": os.path.getsize(path),
+        "sha256": file_sha256(str(path)),
+        "triangles": int(triangles),
+    }

@@ -15,8 +15,7 @@ import numpy as np
 
 from ..atomic_write import write_text
 from ..camera_json import camera_dict
-from ..cli_mesh import bake_from_mesh
-from ..pipeline import BakeOptions, ProbePlacementSpec
+from ..pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh
 from .measure import RunContext, measure, psnr_only
 from .presets import DEFAULT_TRACE
 

@@ -15,8 +15,7 @@ from typing import Dict, List, Optional, Sequence, Tuple
 import numpy as np
 
 from .. import pipeline
-from ..cli_mesh import bake_from_mesh
-from ..pipeline import BakeOptions, ProbePlacementSpec
+from ..pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh
 from ..embree_rates import embree_rates
 from .measure import RunContext, measure, nearest_probe_distance, pixel_count, psnr_only, timing
 from .presets import BAKE_VARIANTS, COMPACT_TRACE, DEFAULT_TRACE, LOAD_KEYS

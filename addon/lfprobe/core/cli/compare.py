@@ -3,8 +3,8 @@
 Compares a test view (probe render, splat) with a ground-truth view of the same camera:
 PSNR, SSIM, FLIP, depth AbsRel/RMSE and the HIT/MISS/UNKNOWN confusion, every figure defined in
 lfprobe.core.metrics and measured by lfprobe.core.compare. `add_parsers(subparsers)` adds the
-subcommand to the lfprobe parser; `python -m lfprobe.core.cli_compare ...` runs it on its own. Exit status 2 for a missing or
-unreadable file or images of different sizes.
+subcommand to the lfprobe parser. Exit status 2 for a missing or unreadable file or images of
+different sizes.
 """
 
 from __future__ import annotations
@@ -13,8 +13,8 @@ import argparse
 import json
 from typing import Dict
 
-from .compare import compare_files
-from .json_values import strict_json
+from ..compare import compare_files
+from ..json_values import strict_json
 
 
 def _fmt(value, spec: str, unit: str = "") -> str:

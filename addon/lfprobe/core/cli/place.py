@@ -5,53 +5,14 @@ that lets them see more; with --views, probes added greedily where the given vie
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 from collections import Counter
 
-from .atomic_write import atomic_open
-from .cli_storage import add_storage_arguments, bake_storage
-from .pipeline import ProbePlacementSpec, load_scans, plan_probes
-from .progress import TerminalProgress
-
-
-def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
-    """The planning options shared by `place` and `bake --auto`."""
-    group = parser.add_argument_group("planning (place, bake --auto)")
-    group.add_argument("--min-res", type=int, default=64, help="smallest resolution chosen")
-    group.add_argument("--max-res", type=int, default=4096, help="largest resolution chosen")
-    group.add_argument("--footprint", type=float, default=0.0, metavar="M",
-                       help="texel size wanted at a probe's median distance (metres); caps the "
-                            "resolution; 0 = as fine as the data supports")
-    group.add_argument("--quantile", type=float, default=0.5,
-                       help="quantile of the per-direction supported resolutions (0.5: median)")
-    group.add_argument("--samples-per-spacing", type=float, default=2.5, metavar="K",
-                       help="texels per point spacing along each axis (default 2.5: the splatted "
-                            "surface sampled finer than twice its point density)")
-    group.add_argument("--clearance", type=float, default=0.05, metavar="M",
-                       help="a probe with surfaces nearer than this is too close")
-    group.add_argument("--max-move", type=float, default=0.0, metavar="M",
-                       help="how far a probe may be moved (0: 0.45 × grid spacing, 0.25 m loose)")
-    group.add_argument("--no-classify", action="store_true",
-                       help="no classification, no moves, no drops (resolution only)")
-    group.add_argument("--keep-useless", action="store_true",
-                       help="keep probes that stay inside, too close, blind or idle at full size")
-
-
-def plan_options(args, auto_resolution: bool = True) -> dict:
-    return {
-        "auto_resolution": auto_resolution,
-        "min_resolution": args.min_res,
-        "max_resolution": args.max_res,
-        "footprint": args.footprint,
-        "quantile": args.quantile,
-        "samples_per_spacing": args.samples_per_spacing,
-        "clearance": args.clearance,
-        "max_move": args.max_move,
-        "classify": not args.no_classify,
-        "drop": not args.keep_useless,
-    }
+from ..atomic_write import atomic_open
+from ..pipeline import ProbePlacementSpec, load_scans, plan_probes
+from ..progress import TerminalProgress
+from .arguments import add_plan_arguments, add_storage_arguments, bake_storage, plan_options, triples
 
 
 def read_view_cameras(paths) -> list:
@@ -79,8 +40,7 @@ def read_view_cameras(paths) -> list:
 def _cmd_place_adaptive(args) -> int:
     """place --views: the base placement (if any), then probes at the eyes of the views that
     trace the most UNKNOWN pixels until --target-unknown or --budget-mib is met."""
-    from .adaptive import budget_from_mib, place_adaptively
-    from .cli import _triples
+    from ..adaptive import budget_from_mib, place_adaptively
 
     if not args.out_probes:
         raise ValueError("place --views bakes the probes it places: give --out-probes DIR")
@@ -90,7 +50,7 @@ def _cmd_place_adaptive(args) -> int:
         raise ValueError(f"--res must be from 8 to 8192, got {args.res}")
     budget = budget_from_mib(args.budget_mib)
     cameras = read_view_cameras(args.views)
-    positions = _triples(args.probe, "--probe")
+    positions = triples(args.probe, "--probe")
     grid = [args.grid_min, args.grid_max, args.counts]
     base_grid = None
     if any(g is not None for g in grid):
@@ -98,7 +58,7 @@ def _cmd_place_adaptive(args) -> int:
                            counts=args.counts).validate()
         base_grid = {"min": list(args.grid_min), "max": list(args.grid_max), "counts": list(args.counts)}
     progress = None if args.quiet else TerminalProgress()
-    cloud = load_scans(args.scan, _triples(args.scanner, "--scanner"), args.columns or "",
+    cloud = load_scans(args.scan, triples(args.scanner, "--scanner"), args.columns or "",
                        "" if args.no_cache else args.cache, progress=progress)
     result = place_adaptively(
         cloud, cameras, args.out_probes, base_positions=positions, base_grid=base_grid,
@@ -129,19 +89,17 @@ def _cmd_place_adaptive(args) -> int:
 
 
 def _cmd_place(args) -> int:
-    from .cli import _triples  # the CLI's own X Y Z parsing
-
     if args.views:
         return _cmd_place_adaptive(args)
     for option, value in (("--out-probes", args.out_probes), ("--budget-mib", args.budget_mib)):
         if value is not None:
             raise ValueError(f"{option} is for adaptive placement: give --views CAM.json too")
-    placement = ProbePlacementSpec(positions=_triples(args.probe, "--probe"),
+    placement = ProbePlacementSpec(positions=triples(args.probe, "--probe"),
                                    grid_min=args.grid_min, grid_max=args.grid_max,
                                    counts=args.counts)
     placement.validate()
     progress = None if args.quiet else TerminalProgress()
-    cloud = load_scans(args.scan, _triples(args.scanner, "--scanner"), args.columns or "",
+    cloud = load_scans(args.scan, triples(args.scanner, "--scanner"), args.columns or "",
                        "" if args.no_cache else args.cache, progress=progress)
     probes = plan_probes(cloud, placement, plan_options(args), progress)
     result = {"scans": [os.path.abspath(p) for p in args.scan], "points": len(cloud),

@@ -1,60 +1,12 @@
 """Mesh subcommands (bpy-free): ``gt`` (Embree ground truth of a view) and ``scan`` (a
-simulated laser scan of a mesh), plus ``bake_from_mesh`` for ``./lfprobe bake --mesh FILE``."""
+simulated laser scan of a mesh); ``./lfprobe bake --mesh FILE`` bakes with pipeline.bake_from_mesh."""
 
 from __future__ import annotations
 
 import json
-import os
-from typing import Sequence
 
-from . import native
-from .pipeline import BakeOptions, ProbePlacementSpec, Progress, apply_storage
-from .progress import TerminalProgress
-from .sources import file_sha256
-
-
-def _describe_mesh(path: str, triangles: int) -> dict:
-    """The manifest's record of one mesh file (like sources.describe_scan)."""
-    return {
-        "kind": "mesh",
-        "path": os.path.abspath(path),
-        "bytes": os.path.getsize(path),
-        "sha256": file_sha256(str(path)),
-        "triangles": int(triangles),
-    }
-
-
-def bake_from_mesh(
-    mesh_paths: Sequence[str],
-    out_dir: str,
-    placement: ProbePlacementSpec,
-    options: BakeOptions,
-    progress: Progress = None,
-    start_only: bool = False,
-):
-    """Mesh file → probe set folder, baked with Embree (exact distances, normals, base colour).
-    One mesh file is supported per bake. options.extra may hold "supersample" (n×n rays per
-    texel for the colour; left out: the native default). Returns the summary dict, or the running Job with start_only."""
-    if len(mesh_paths) != 1:
-        raise ValueError(f"bake --mesh takes one mesh file, got {len(mesh_paths)}")
-    placement.validate()
-    _native = native.load()
-    mesh = _native.load_mesh(str(mesh_paths[0]))
-    sources = [_describe_mesh(mesh_paths[0], mesh.triangle_count)]
-    job = _native.start_bake_probe_set_from_mesh(
-        mesh,
-        out_dir,
-        resolution=int(options.resolution),
-        **placement.native_kwargs(),
-        sources_json=json.dumps(sources),
-        **({"supersample": int(options.extra["supersample"])} if options.extra.get("supersample") else {}),
-    )
-    if start_only:
-        return job
-    summary = job.run(progress)
-    summary["triangles"] = mesh.triangle_count
-    apply_storage(out_dir, summary, options)
-    return summary
+from .. import native
+from ..progress import TerminalProgress
 
 
 def _cmd_gt(args) -> int:

@@ -12,8 +12,8 @@ import argparse
 
 
 def _cmd_report(args) -> int:
-    from .report.measure import stderr_log
-    from .report.runner import run_report
+    from ..report.measure import stderr_log
+    from ..report.runner import run_report
 
     data = run_report(args.scene, args.out, args.preset, args.threads, keep_work=args.keep_work,
                       log=_quiet if args.quiet else stderr_log)

@@ -1,9 +1,9 @@
 """The lfprobe command line (bpy-free): ``./lfprobe SUBCOMMAND ...`` from the checkout.
 
-Subcommands: bake (scan files → probe set), info (what a probe set holds), store (how a set
-loads into memory), render (a view
-traced through the probes), splat (the raw cloud drawn as splats), camera (a camera file),
-compare (metrics of a view against ground truth), bench (measured figures). Exit status: 0 success, 2 bad input, 1 other failure, 130 cancelled.
+Subcommands: bake (scan files → probe set), info (what a probe set holds), render (a view
+traced through the probes), splat (the raw cloud drawn as splats), camera (a camera file) and
+bench (measured figures) are here; store, compare, gt, scan, place and report each have their
+module in this package. Exit status: 0 success, 2 bad input, 1 other failure, 130 cancelled.
 """
 
 from __future__ import annotations
@@ -11,21 +11,15 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from typing import List, Optional, Sequence
+from typing import Optional, Sequence
 
-from . import cli_compare, cli_mesh, cli_place, cli_report, cli_storage, native
-from .pipeline import BakeOptions, ProbePlacementSpec, bake_from_scans
-from .probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
-from .probe_storage import describe as describe_storage
-from .progress import TerminalProgress
-
-
-def _triples(values: Optional[List[List[float]]], option: str) -> List[List[float]]:
-    """`--probe X Y Z [X Y Z ...]`, given once or repeated, as a list of (x, y, z)."""
-    flat = [v for group in (values or []) for v in group]
-    if len(flat) % 3:
-        raise ValueError(f"{option} takes coordinates in threes (X Y Z), got {len(flat)} numbers")
-    return [flat[i : i + 3] for i in range(0, len(flat), 3)]
+from .. import native
+from . import compare as compare_cli, mesh as mesh_cli, place as place_cli, report as report_cli, storage as storage_cli
+from ..pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh, bake_from_scans
+from ..probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
+from ..probe_storage import describe as describe_storage
+from ..progress import TerminalProgress
+from .arguments import add_plan_arguments, add_storage_arguments, bake_storage, plan_options, triples
 
 
 def _mib(n: float) -> str:
@@ -34,7 +28,7 @@ def _mib(n: float) -> str:
 
 def _cmd_bake(args) -> int:
     placement = ProbePlacementSpec(
-        positions=_triples(args.probe, "--probe"),
+        positions=triples(args.probe, "--probe"),
         grid_min=args.grid_min,
         grid_max=args.grid_max,
         counts=args.counts,
@@ -48,14 +42,14 @@ def _cmd_bake(args) -> int:
     if args.auto:
         if args.mesh:
             raise ValueError("--auto plans from scan points: use it with --scan")
-        options.plan = cli_place.plan_options(args)
-    options.storage = cli_storage.bake_storage(args)
+        options.plan = plan_options(args)
+    options.storage = bake_storage(args)
     options.distance_step = args.distance_step
     progress = None if args.quiet else TerminalProgress()
     if args.mesh:
         if args.supersample is not None:
             options.extra["supersample"] = args.supersample
-        summary = cli_mesh.bake_from_mesh(args.mesh, args.out, placement, options, progress)
+        summary = bake_from_mesh(args.mesh, args.out, placement, options, progress)
         summary.setdefault("points", 0)
         return _print_bake_summary(args, summary, f"{args.mesh[0]}")
     summary = bake_from_scans(
@@ -63,7 +57,7 @@ def _cmd_bake(args) -> int:
         args.out,
         placement,
         options,
-        scanners=_triples(args.scanner, "--scanner"),
+        scanners=triples(args.scanner, "--scanner"),
         columns=args.columns or "",
         cache_dir="" if args.no_cache else args.cache,
         progress=progress,
@@ -186,11 +180,11 @@ def _cmd_render(args) -> int:
 
 
 def _cmd_splat(args) -> int:
-    from .pipeline import load_scans
+    from ..pipeline import load_scans
 
     _native = native.load()
     progress = None if args.quiet else TerminalProgress()
-    cloud = load_scans(args.scan, _triples(args.scanner, "--scanner"), args.columns or "",
+    cloud = load_scans(args.scan, triples(args.scanner, "--scanner"), args.columns or "",
                        "" if args.no_cache else args.cache, progress=progress)
     job = _native.start_splat(cloud, args.camera, args.out, radius_scale=args.radius_scale,
                               fixed_radius=args.fixed_radius, threads=args.threads)
@@ -209,7 +203,7 @@ def _cmd_splat(args) -> int:
 
 
 def _cmd_camera(args) -> int:
-    from .camera_json import camera_dict, write_camera
+    from ..camera_json import camera_dict, write_camera
 
     write_camera(args.out, camera_dict(args.position, args.look_at, args.res, args.lens, args.type))
     print(f"wrote {args.out}")
@@ -220,10 +214,10 @@ def _cmd_bench(args) -> int:
     if args.res is None:
         args.res = 1024 if args.suite == "render" else 2048
     if args.suite == "render":
-        from . import bench_render
+        from .. import bench_render
 
         return bench_render.main(args)
-    from . import bench
+    from .. import bench
 
     return bench.main(args)
 
@@ -261,14 +255,14 @@ def build_parser() -> argparse.ArgumentParser:
                       help="scans: plan first (see `place`): each probe at the resolution its "
                            "points support (--res is then ignored), probes inside geometry or "
                            "against walls moved, useless ones dropped")
-    cli_place.add_plan_arguments(bake)
-    cli_storage.add_storage_arguments(bake, ["full", "compact"], None,
+    add_plan_arguments(bake)
+    add_storage_arguments(bake, ["full", "compact"], None,
                            "how the probes load into memory (the files keep full precision): full "
                            "(18 bytes a texel), compact (7: 8-bit sRGB radiance, 16-bit distance, "
                            "8+8-bit normals, no confidence); default full, compact with --auto")
     bake.set_defaults(run=_cmd_bake)
 
-    cli_storage.add_parsers(sub)
+    storage_cli.add_parsers(sub)
 
     info = sub.add_parser("info", help="what a probe set holds")
     info.add_argument("folder", metavar="DIR")
@@ -287,7 +281,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_fidelity_arguments(render)
     render.add_argument("--json", action="store_true", help="print the stats as JSON")
     render.add_argument("--quiet", action="store_true")
-    cli_storage.add_storage_arguments(render, ["manifest", "full", "compact"], "manifest",
+    add_storage_arguments(render, ["manifest", "full", "compact"], "manifest",
                            "how the probes are held in memory for this render: as the set's "
                            "manifest says, full or compact")
     render.set_defaults(run=_cmd_render)
@@ -316,10 +310,10 @@ def build_parser() -> argparse.ArgumentParser:
     camera.add_argument("--out", required=True, metavar="CAM.json")
     camera.set_defaults(run=_cmd_camera)
 
-    cli_compare.add_parsers(sub)
-    cli_mesh.add_parsers(sub)
-    cli_report.add_parsers(sub)
-    cli_place.add_parsers(sub)
+    compare_cli.add_parsers(sub)
+    mesh_cli.add_parsers(sub)
+    report_cli.add_parsers(sub)
+    place_cli.add_parsers(sub)
 
     bench = sub.add_parser("bench", help="benchmarks that print measured figures")
     bench.add_argument("suite", choices=["core", "render"],
@@ -355,7 +349,3 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     except native.cancelled_type():
         print("lfprobe: cancelled", file=sys.stderr)
         return 130
-
-
-if __name__ == "__main__":
-    sys.exit(main())

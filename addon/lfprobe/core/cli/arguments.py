@@ -1,0 +1,68 @@
+"""Options and option parsing shared by several subcommands: X Y Z triples (bake, place), the
+planning options (place, bake --auto) and the storage options (bake, place, render, store)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import List, Optional
+
+
+def triples(values: Optional[List[List[float]]], option: str) -> List[List[float]]:
+    """`--probe X Y Z [X Y Z ...]`, given once or repeated, as a list of (x, y, z)."""
+    flat = [v for group in (values or []) for v in group]
+    if len(flat) % 3:
+        raise ValueError(f"{option} takes coordinates in threes (X Y Z), got {len(flat)} numbers")
+    return [flat[i : i + 3] for i in range(0, len(flat), 3)]
+
+
+def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
+    """The planning options shared by `place` and `bake --auto`."""
+    group = parser.add_argument_group("planning (place, bake --auto)")
+    group.add_argument("--min-res", type=int, default=64, help="smallest resolution chosen")
+    group.add_argument("--max-res", type=int, default=4096, help="largest resolution chosen")
+    group.add_argument("--footprint", type=float, default=0.0, metavar="M",
+                       help="texel size wanted at a probe's median distance (metres); caps the "
+                            "resolution; 0 = as fine as the data supports")
+    group.add_argument("--quantile", type=float, default=0.5,
+                       help="quantile of the per-direction supported resolutions (0.5: median)")
+    group.add_argument("--samples-per-spacing", type=float, default=2.5, metavar="K",
+                       help="texels per point spacing along each axis (default 2.5: the splatted "
+                            "surface sampled finer than twice its point density)")
+    group.add_argument("--clearance", type=float, default=0.05, metavar="M",
+                       help="a probe with surfaces nearer than this is too close")
+    group.add_argument("--max-move", type=float, default=0.0, metavar="M",
+                       help="how far a probe may be moved (0: 0.45 × grid spacing, 0.25 m loose)")
+    group.add_argument("--no-classify", action="store_true",
+                       help="no classification, no moves, no drops (resolution only)")
+    group.add_argument("--keep-useless", action="store_true",
+                       help="keep probes that stay inside, too close, blind or idle at full size")
+
+
+def plan_options(args, auto_resolution: bool = True) -> dict:
+    return {
+        "auto_resolution": auto_resolution,
+        "min_resolution": args.min_res,
+        "max_resolution": args.max_res,
+        "footprint": args.footprint,
+        "quantile": args.quantile,
+        "samples_per_spacing": args.samples_per_spacing,
+        "clearance": args.clearance,
+        "max_move": args.max_move,
+        "classify": not args.no_classify,
+        "drop": not args.keep_useless,
+    }
+
+
+DISTANCE_STEP_HELP = ("compact storage: distance quantum in metres (default 0.001, half the ~2 mm "
+                      "range noise of a FARO-class scanner at 10 m)")
+
+
+def add_storage_arguments(parser, choices, default, text: str) -> None:
+    parser.add_argument("--storage", choices=choices, default=default, help=text)
+    parser.add_argument("--distance-step", type=float, default=0.0, metavar="M", help=DISTANCE_STEP_HELP)
+
+
+def bake_storage(args):
+    """The storage a bake records: the one asked for, else compact for --auto (it models only
+    what the data carries, in memory too), else the manifest's default (None: full)."""
+    return args.storage or ("compact" if getattr(args, "auto", False) else None)
