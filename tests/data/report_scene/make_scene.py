@@ -19,7 +19,7 @@ if os.path.join(_ROOT, "addon") not in sys.path:
     sys.path.insert(0, os.path.join(_ROOT, "addon"))
 
 from lfprobe.core.bench import room_faces  # noqa: E402
-from lfprobe.core.cli_compare import write_png  # noqa: E402
+from lfprobe.core.compare import write_png  # noqa: E402
 
 # Linear base colours of the boxes in bench.ROOM_BOXES order: shell, table, table, column.
 MATERIALS = [("shell", (0.8, 0.8, 0.8)), ("table_red", (0.6, 0.12, 0.08)),
