@@ -4,6 +4,9 @@ aside: every EXR's channels bit for bit and its metadata JSON, every probe set's
 byte, report.json's values, and the report's view images (PNG) byte for byte.
 
 usage: /usr/bin/python3 tools/diff_outputs.py BEFORE AFTER     (exit status 1 when anything differs)
+
+Open3D's Poisson reconstruction (the report's "Poisson mesh" peer) runs on threads and is not
+deterministic: its rows and pictures differ between two runs of the same code.
 """
 import json
 import math
@@ -13,10 +16,14 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "addon"))
 
-# Keys whose values are clock readings or derived from them.
-TIMING = re.compile(r"seconds|per_second|_ms|ms_|speedup|fps|time|wall|elapsed|date", re.I)
-# Files written with the time or the machine in them, or whose bytes encode timings.
-SKIP_FILES = {"report.html", "report.log"}
+# Keys and CSV columns whose values are clock readings or chosen by them (the fastest Embree
+# packet size), and the findings' sentences, which quote times (their figures are compared
+# where the report stores them).
+TIMING = re.compile(
+    r"seconds|per_second|_ms|ms_|speedup|fps|time|wall|elapsed|date|started|over_embree|"
+    r"embree_packet|findings", re.I)
+# Files written with the time in them, or plots of timings.
+SKIP_FILES = re.compile(r"^(report\.html|report\.log|speed_.*\.png|peers_ms\.png)$")
 
 
 def flatten(value, path=""):
@@ -33,6 +40,8 @@ def flatten(value, path=""):
 def same_value(a, b):
     if isinstance(a, float) and isinstance(b, float) and math.isnan(a) and math.isnan(b):
         return True
+    if isinstance(a, str) and isinstance(b, str) and "/" in a and "/" in b:
+        return Path(a).name == Path(b).name  # a file of the run: the runs' folders differ
     return a == b
 
 
@@ -45,6 +54,21 @@ def diff_json(a, b, label):
             out.append(f"{label}: {k} only in {'after' if k not in fa else 'before'}")
         elif not same_value(fa[k], fb[k]):
             out.append(f"{label}: {k}: {fa[k]!r} -> {fb[k]!r}")
+    return out
+
+
+def diff_csv(pa, pb, label):
+    import csv
+
+    ra = list(csv.DictReader(pa.open(newline="")))
+    rb = list(csv.DictReader(pb.open(newline="")))
+    if len(ra) != len(rb):
+        return [f"{label}: {len(ra)} rows -> {len(rb)}"]
+    out = []
+    for i, (x, y) in enumerate(zip(ra, rb)):
+        for k in sorted(set(x) | set(y)):
+            if not TIMING.search(k) and not same_value(x.get(k), y.get(k)):
+                out.append(f"{label}: row {i} {k}: {x.get(k)!r} -> {y.get(k)!r}")
     return out
 
 
@@ -77,11 +101,13 @@ def main(argv):
     compared = 0
     for rel in sorted(files_a & files_b):
         pa, pb = before / rel, after / rel
-        if rel.name in SKIP_FILES or "plot" in rel.name:
+        if SKIP_FILES.match(rel.name):
             continue
         compared += 1
         if rel.suffix == ".exr" and rel.parts[0] != "mesh_probe" and "probe_" not in rel.name:
             problems += diff_exr(pa, pb, str(rel))
+        elif rel.suffix == ".csv":
+            problems += diff_csv(pa, pb, str(rel))
         elif rel.suffix == ".json" and rel.name in ("report.json", "manifest.json"):
             problems += diff_json(json.loads(pa.read_text()), json.loads(pb.read_text()), str(rel))
         elif pa.read_bytes() != pb.read_bytes():

@@ -5,7 +5,7 @@
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
-# The shared test data (DESIGN.md: ../shared/data beside the checkout). A clone made elsewhere
+# The shared test data (docs/DESIGN.md: ../shared/data beside the checkout). A clone made elsewhere
 # from a local checkout (git clone /path/to/checkout) finds it beside the checkout it came from.
 if [ -z "${LFPROBE_SHARED_DATA:-}" ]; then
   LFPROBE_SHARED_DATA="$root/../shared/data"

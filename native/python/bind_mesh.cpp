@@ -270,17 +270,8 @@ void bind_mesh(py::module_& m) {
                     progress.begin_stage("loading mesh", 1);
                     const MeshHandle h = resolve(mesh);
                     return on_threads(threads, [&] {
-                        GroundTruthStats stats;
-                        const RenderedImage image =
-                            render_ground_truth(*h->scene, cam, settings, &progress, &stats);
-                        write_rendered_exr(
-                            output, image,
-                            nlohmann::json{{"ground_truth", h->mesh.path},
-                                           {"camera", cam.to_json()},
-                                           {"samples_per_pixel", settings.samples_per_pixel},
-                                           {"stats", stats.to_json()}}
-                                .dump());
-                        return stats;
+                        return ground_truth_to_exr(*h->scene, h->mesh.path, cam, settings, output,
+                                                   &progress);
                     });
                 }),
                 std::function<py::object(GroundTruthStats &&)>(

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
 #include "binding_helpers.hpp"
@@ -14,6 +15,7 @@
 #include "job.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/local_geometry.hpp"
+#include "lfprobe/probe_placement.hpp"
 #include "lfprobe/probe_plan.hpp"
 
 namespace py = pybind11;
@@ -86,6 +88,31 @@ struct PlanArgs {
 } // namespace
 
 void bind_plan(py::module_& m) {
+    m.def(
+        "grid_positions",
+        [](const std::vector<double>& grid_min, const std::vector<double>& grid_max,
+           const std::vector<int>& counts) {
+            if (counts.size() != 3) {
+                throw InputError("grid_positions: expected three counts");
+            }
+            const std::vector<glm::dvec3> positions =
+                ProbeGrid::spanning(dvec3_from(grid_min, "grid_min"),
+                                    dvec3_from(grid_max, "grid_max"),
+                                    {counts[0], counts[1], counts[2]})
+                    .positions();
+            py::array_t<double> out({static_cast<py::ssize_t>(positions.size()), py::ssize_t{3}});
+            double* p = out.mutable_data();
+            for (const glm::dvec3& q : positions) {
+                *p++ = q.x;
+                *p++ = q.y;
+                *p++ = q.z;
+            }
+            return out;
+        },
+        py::arg("grid_min"), py::arg("grid_max"), py::arg("counts"),
+        "The probes of a grid spanning the box grid_min..grid_max with `counts` probes per axis, "
+        "as the bake places them: (n, 3) float64, x fastest, then y, then z; an axis with one "
+        "probe has it at the box's centre.");
     m.def(
         "start_plan_probes",
         [](std::shared_ptr<PointCloud> cloud, std::vector<std::vector<double>> positions,

@@ -1,5 +1,4 @@
 // Bindings of the renderer: probe-traced views, the splat baseline, rendered images.
-#include <chrono>
 #include <cstring>
 #include <memory>
 #include <optional>
@@ -15,7 +14,6 @@
 #include "lfprobe/camera.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/image_exr.hpp"
-#include "lfprobe/local_geometry.hpp"
 #include "lfprobe/probe_field.hpp"
 #include "lfprobe/render.hpp"
 #include "lfprobe/splat_render.hpp"
@@ -205,16 +203,9 @@ void bind_render(py::module_& m) {
                 {
                     py::gil_scoped_release release;
                     image = on_threads(threads, [&] {
-                        return render_probe_view(*field, cam, settings, nullptr, &stats);
+                        return render_probe_view_to_exr(*field, cam, settings, output, nullptr,
+                                                        &stats);
                     });
-                    if (!output.empty()) {
-                        write_rendered_exr(
-                            output, image,
-                            nlohmann::json{{"camera", cam.to_json()},
-                                           {"settings", render_settings_json(settings)},
-                                           {"stats", stats.to_json()}}
-                                .dump());
-                    }
                 }
                 return py::make_tuple(image_dict(std::move(image), ""), render_stats_dict(stats));
             },
@@ -243,21 +234,8 @@ void bind_render(py::module_& m) {
             return std::make_unique<Job>(
                 std::function<RenderStats(Progress&)>([=](Progress& progress) {
                     return on_threads(threads, [&] {
-                        progress.begin_stage("loading probes", 1);
-                        const ProbeField field = ProbeField::load(folder, &progress, 0, chosen);
-                        RenderStats stats;
-                        const RenderedImage image =
-                            render_probe_view(field, cam, settings, &progress, &stats);
-                        write_rendered_exr(
-                            output, image,
-                            nlohmann::json{{"probes", folder},
-                                           {"camera", cam.to_json()},
-                                           {"settings", render_settings_json(settings)},
-                                           {"storage", field.storage().to_json()},
-                                           {"memory_bytes", field.memory_bytes()},
-                                           {"stats", stats.to_json()}}
-                                .dump());
-                        return stats;
+                        return render_probe_set_to_exr(folder, cam, settings, chosen, output,
+                                                       &progress);
                     });
                 }),
                 std::function<py::object(RenderStats &&)>(
@@ -282,23 +260,9 @@ void bind_render(py::module_& m) {
             using Result = std::pair<SplatStats, double>;
             auto work = [=](Progress& progress) {
                 return on_threads(threads, [&] {
-                    std::optional<LocalGeometry> geometry;
                     double geometry_seconds = 0.0;
-                    if (settings.fixed_radius <= 0.0) {
-                        const auto start = std::chrono::steady_clock::now();
-                        geometry = estimate_local_geometry(*cloud, {}, &progress);
-                        geometry_seconds =
-                            std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-                                .count();
-                    }
-                    SplatStats stats;
-                    const RenderedImage image = render_splats(
-                        *cloud, geometry ? &*geometry : nullptr, cam, settings, &progress, &stats);
-                    write_rendered_exr(output, image,
-                                       nlohmann::json{{"camera", cam.to_json()},
-                                                      {"settings", splat_settings_json(settings)},
-                                                      {"stats", stats.to_json()}}
-                                           .dump());
+                    const SplatStats stats = splat_cloud_to_exr(*cloud, cam, settings, output,
+                                                                &progress, &geometry_seconds);
                     return Result{stats, geometry_seconds};
                 });
             };

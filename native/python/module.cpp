@@ -14,10 +14,13 @@
 #include "bindings.hpp"
 #include "job.hpp"
 #include "lfprobe/error.hpp"
+#include "lfprobe/mesh_bake.hpp"
 #include "lfprobe/min_distance_pyramid.hpp"
 #include "lfprobe/octahedral.hpp"
 #include "lfprobe/probe_exr.hpp"
 #include "lfprobe/probe_set.hpp"
+#include "lfprobe/radiance_filter.hpp"
+#include "lfprobe/render.hpp"
 #include "lfprobe/scan_cache.hpp"
 #include "lfprobe/scan_reader.hpp"
 
@@ -62,20 +65,14 @@ std::vector<glm::vec3> vec3_from(const FloatArray& a, const char* what, py::ssiz
     return out;
 }
 
-PointCloud load_scans(const std::vector<std::string>& paths,
-                      const std::vector<std::vector<double>>& scanners,
-                      const std::optional<std::vector<double>>& world_offset,
-                      const std::string& columns, const std::string& cache_dir,
-                      Progress& progress) {
-    if (paths.empty()) {
-        throw InputError("load_scans: no scan files given");
-    }
+// The bindings' arguments as the core's options.
+PointCloud load_scan_files(const std::vector<std::string>& paths,
+                           const std::vector<std::vector<double>>& scanners,
+                           const std::optional<std::vector<double>>& world_offset,
+                           const std::string& columns, const std::string& cache_dir,
+                           Progress& progress) {
     ScanReadOptions options;
     options.columns = columns;
-    std::vector<ScanFile> files;
-    for (const std::string& path : paths) {
-        files.push_back(read_scan_file_cached(path, options, cache_dir, &progress));
-    }
     MergeOptions merge;
     for (const auto& s : scanners) {
         merge.scanners.push_back(dvec3_from(s, "scanner"));
@@ -84,7 +81,7 @@ PointCloud load_scans(const std::vector<std::string>& paths,
         merge.world_offset = dvec3_from(*world_offset, "world_offset");
         merge.force_world_offset = true;
     }
-    return merge_scans(std::move(files), merge);
+    return load_scans(paths, options, merge, cache_dir, &progress);
 }
 
 struct BakeRequest {
@@ -120,8 +117,8 @@ std::unique_ptr<Job> start_load(std::vector<std::string> paths,
                                 std::optional<std::vector<double>> world_offset,
                                 std::string columns, std::string cache_dir) {
     return std::make_unique<Job>(std::function<PointCloud(Progress&)>([=](Progress& progress) {
-                                     return load_scans(paths, scanners, world_offset, columns,
-                                                       cache_dir, progress);
+                                     return load_scan_files(paths, scanners, world_offset, columns,
+                                                            cache_dir, progress);
                                  }),
                                  std::function<py::object(PointCloud &&)>([](PointCloud&& c) {
                                      return py::cast(std::make_shared<PointCloud>(std::move(c)));
@@ -183,12 +180,40 @@ py::dict probe_dict(ProbeMap&& map) {
     return d;
 }
 
+// The defaults of the core's settings, the one place the CLI, the add-on's properties and the
+// report read them from.
+py::dict defaults_dict() {
+    const RenderSettings render;
+    const BakeSettings bake;
+    py::dict trace;
+    trace["mode"] = field_mode_name(render.trace.mode);
+    trace["thickness"] = render.trace.probe.thickness;
+    trace["use_coarse_levels"] = render.trace.probe.use_coarse_levels;
+    trace["max_probes"] = render.trace.max_probes;
+    trace["filter"] = radiance_filter_name(render.trace.filter);
+    trace["blend"] = render.trace.blend;
+    trace["spp"] = render.samples_per_pixel;
+    trace["tile_size"] = render.tile_size;
+    py::dict baking;
+    baking["resolution"] = bake.resolution;
+    baking["splat_scale"] = bake.splat_scale;
+    baking["hole_fill_texels"] = bake.hole_fill_texels;
+    baking["max_splat_radius_texels"] = bake.max_splat_radius_texels;
+    baking["normal_neighbours"] = LocalGeometryOptions{}.normal_neighbours;
+    baking["supersample"] = MeshBakeSettings{}.supersample;
+    py::dict d;
+    d["trace"] = trace;
+    d["bake"] = baking;
+    return d;
+}
+
 } // namespace
 
 PYBIND11_MODULE(_native, m) {
     m.doc() = "lfprobe native core: scan import, probe baking, probe sets";
     m.attr("__version__") = LFPROBE_VERSION;
     m.attr("PROBE_SET_FORMAT_VERSION") = kProbeSetFormatVersion;
+    m.attr("DEFAULTS") = defaults_dict();
 
     static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
     static py::exception<IoError> io_error(m, "NativeIOError", PyExc_OSError);
@@ -304,47 +329,24 @@ PYBIND11_MODULE(_native, m) {
                    scan_index,
                const std::vector<std::optional<std::vector<double>>>& scanners,
                const std::vector<double>& world_offset) {
-                auto cloud = std::make_shared<PointCloud>();
-                cloud->positions = vec3_from(positions, "positions", -1);
-                const auto n = static_cast<py::ssize_t>(cloud->positions.size());
-                for (const glm::vec3& p : cloud->positions) {
-                    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
-                        throw InputError("positions: NaN or infinite coordinate");
-                    }
-                }
-                if (colors) {
-                    cloud->colors = vec3_from(*colors, "colors", n);
-                }
-                if (normals) {
-                    cloud->normals = vec3_from(*normals, "normals", n);
-                }
-                cloud->world_offset = dvec3_from(world_offset, "world_offset");
-                const std::size_t scan_count = std::max<std::size_t>(1, scanners.size());
+                const std::vector<glm::vec3> points = vec3_from(positions, "positions", -1);
+                const auto n = static_cast<py::ssize_t>(points.size());
+                std::vector<std::uint32_t> scans;
                 if (scan_index) {
                     if (scan_index->ndim() != 1 || scan_index->shape(0) != n) {
                         throw InputError("scan_index: expected shape (n,)");
                     }
-                    cloud->scan_index.assign(scan_index->data(), scan_index->data() + n);
-                    for (const std::uint32_t s : cloud->scan_index) {
-                        if (s >= scan_count) {
-                            throw InputError("scan_index: " + std::to_string(s) +
-                                             " names no scan (give one scanner entry per scan)");
-                        }
-                    }
-                } else {
-                    cloud->scan_index.assign(static_cast<std::size_t>(n), 0);
+                    scans.assign(scan_index->data(), scan_index->data() + n);
                 }
-                cloud->scans.resize(scan_count);
-                for (std::size_t s = 0; s < scan_count; ++s) {
-                    cloud->scans[s].path = "array";
-                    if (s < scanners.size() && scanners[s]) {
-                        cloud->scans[s].scanner = dvec3_from(*scanners[s], "scanner");
-                        cloud->scans[s].has_scanner = true;
-                    }
+                std::vector<std::optional<glm::dvec3>> scanner_positions;
+                for (const auto& s : scanners) {
+                    scanner_positions.push_back(s ? std::optional(dvec3_from(*s, "scanner"))
+                                                  : std::nullopt);
                 }
-                for (const std::uint32_t s : cloud->scan_index) {
-                    ++cloud->scans[s].point_count;
-                }
+                auto cloud = std::make_shared<PointCloud>(cloud_from_parts(
+                    points, colors ? vec3_from(*colors, "colors", n) : std::vector<glm::vec3>{},
+                    normals ? vec3_from(*normals, "normals", n) : std::vector<glm::vec3>{},
+                    std::move(scans), scanner_positions, dvec3_from(world_offset, "world_offset")));
                 return cloud;
             },
             py::arg("positions"), py::arg("colors") = py::none(), py::arg("normals") = py::none(),

@@ -11,6 +11,8 @@
 #include <tbb/parallel_for.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/image_exr.hpp"
+#include "lfprobe/image_metadata.hpp"
 #include "lfprobe/probe_trace.hpp"
 
 namespace lfprobe {
@@ -121,6 +123,24 @@ ThroughputResult embree_throughput(const EmbreeScene& scene, const Camera& camer
     return measure_batch_throughput(
         camera, scene.mesh().world_offset, repeats, "embree",
         [&](const Ray* rays, std::size_t count) { return scene.count_hits(rays, count, packet); });
+}
+
+GroundTruthStats ground_truth_to_exr(const EmbreeScene& scene, const std::string& mesh_path,
+                                     const Camera& camera, const GroundTruthSettings& settings,
+                                     const std::string& output_path, Progress* progress) {
+    GroundTruthStats stats;
+    const RenderedImage image = render_ground_truth(scene, camera, settings, progress, &stats);
+    ImageMetadata metadata;
+    metadata.renderer = "embree ground truth";
+    // "samples_per_pixel" at the top level too, where the first images recorded it.
+    metadata.source = nlohmann::json{{"ground_truth", mesh_path},
+                                     {"samples_per_pixel", settings.samples_per_pixel}};
+    metadata.camera = camera.to_json();
+    metadata.settings = nlohmann::json{{"samples_per_pixel", settings.samples_per_pixel},
+                                       {"tile_size", settings.tile_size}};
+    metadata.stats = stats.to_json();
+    write_rendered_exr(output_path, image, metadata);
+    return stats;
 }
 
 } // namespace lfprobe

@@ -1,5 +1,5 @@
 // Hole filling for baked probes: small connected holes are filled from a pull pyramid of the
-// measured texels and marked inferred; large holes stay unknown (DESIGN.md §4).
+// measured texels and marked inferred; large holes stay unknown (docs/DESIGN.md §4).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

@@ -11,6 +11,7 @@
 #include <ImfStringAttribute.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/image_metadata.hpp"
 #include "lfprobe/probe_exr.hpp"
 
 namespace lfprobe {
@@ -61,10 +62,19 @@ constexpr const char* kChannels[] = {"R",   "G",   "B",      "A",     "Z",    "N
 
 } // namespace
 
-RenderedImage::RenderedImage(int w, int h)
-    : width(w), height(h), rgba(pixel_count() * 4, 0.0f),
-      depth(pixel_count(), std::numeric_limits<float>::infinity()), normal(pixel_count() * 3, 0.0f),
-      status(pixel_count(), 0), probe(pixel_count(), -1), steps(pixel_count(), 0) {}
+std::string ImageMetadata::dump() const {
+    nlohmann::json j{{"renderer", renderer}};
+    j.update(source);
+    j["camera"] = camera;
+    j["settings"] = settings;
+    j["stats"] = stats;
+    return j.dump();
+}
+
+void write_rendered_exr(const std::string& path, const RenderedImage& image,
+                        const ImageMetadata& metadata) {
+    write_rendered_exr(path, image, metadata.dump());
+}
 
 void write_rendered_exr(const std::string& path, const RenderedImage& image,
                         const std::string& metadata) {

@@ -8,6 +8,7 @@
 #include <glm/geometric.hpp>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/grid_walk.hpp"
 #include "lfprobe/octahedral.hpp"
 
 namespace lfprobe {
@@ -61,30 +62,11 @@ std::size_t candidates_around(const ProbeField& field, const glm::dvec3& point,
         }
     };
     if (field.is_grid()) {
-        const ProbeGrid& g = field.grid();
-        std::array<int, 3> lo{};
-        std::array<int, 3> hi{};
-        for (int a = 0; a < 3; ++a) {
-            const auto ua = static_cast<std::size_t>(a);
-            if (g.counts[ua] < 2) {
-                continue; // one layer: lo = hi = 0
-            }
-            const double f = std::floor((point[a] - g.origin[a]) / g.spacing[a]);
-            // NaN-safe: a point outside every cell is clamped to the nearest face.
-            const double cell =
-                std::isfinite(f) ? std::clamp(f, 0.0, static_cast<double>(g.counts[ua] - 2)) : 0.0;
-            lo[ua] = static_cast<int>(cell);
-            hi[ua] = lo[ua] + 1;
-        }
-        for (int z = lo[2]; z <= hi[2]; ++z) {
-            for (int y = lo[1]; y <= hi[1]; ++y) {
-                for (int x = lo[0]; x <= hi[0]; ++x) {
-                    offer(static_cast<std::size_t>(x) +
-                          static_cast<std::size_t>(g.counts[0]) *
-                              (static_cast<std::size_t>(y) + static_cast<std::size_t>(g.counts[1]) *
-                                                                 static_cast<std::size_t>(z)));
-                }
-            }
+        std::array<std::size_t, 8> corners{};
+        const std::size_t count =
+            grid_cell_corners(field.grid(), grid_cell_containing(field.grid(), point), corners);
+        for (std::size_t k = 0; k < count; ++k) {
+            offer(corners[k]);
         }
     } else {
         for (std::size_t i = 0; i < field.probe_count(); ++i) {

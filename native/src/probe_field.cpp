@@ -9,13 +9,12 @@
 #include <tbb/parallel_for.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/grid_walk.hpp"
 #include "lfprobe/probe_blend.hpp"
 
 namespace lfprobe {
 
 namespace {
-
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Probes a ray already asked, and how far each proved the ray free: asking again from no
 // further on would give the same UNKNOWN.
@@ -170,6 +169,7 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
     const int coarsest = std::max(coarse_resolution, 1);
     ProbeField field;
     field.manifest_ = read_manifest(folder);
+    field.folder_ = folder;
     const std::size_t count = field.manifest_.probes.size();
     if (count == 0) {
         throw InputError(folder + ": the probe set holds no probes");
@@ -327,110 +327,29 @@ FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
 }
 
 FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings& settings) const {
-    const ProbeGrid& g = grid();
-    // Cells per axis; an axis with one probe has one unbounded cell.
-    std::array<int, 3> cells{};
-    std::array<bool, 3> bounded{};
-    double t_enter = ray.t_min;
-    double t_exit = ray.t_max;
-    for (int a = 0; a < 3; ++a) {
-        const std::size_t ua = static_cast<std::size_t>(a);
-        bounded[ua] = g.counts[ua] > 1;
-        cells[ua] = bounded[ua] ? g.counts[ua] - 1 : 1;
-        if (!bounded[ua]) {
-            continue;
-        }
-        const double lo = g.origin[a];
-        const double hi = g.origin[a] + g.spacing[a] * static_cast<double>(g.counts[ua] - 1);
-        const double o = ray.origin[a];
-        const double d = ray.direction[a];
-        if (d == 0.0) {
-            if (o < lo || o > hi) {
-                t_enter = kInf; // parallel to the slab and outside it
-            }
-            continue;
-        }
-        double t0 = (lo - o) / d;
-        double t1 = (hi - o) / d;
-        if (t0 > t1) {
-            std::swap(t0, t1);
-        }
-        t_enter = std::max(t_enter, t0);
-        t_exit = std::min(t_exit, t1);
-    }
-    if (!(t_enter <= t_exit)) {
+    GridWalk walk(grid(), ray);
+    if (!walk.meets_grid()) {
         return trace_nearest(ray, settings); // the ray never meets the grid's box
     }
-
-    // The cell where the ray is inside the box, clamped at the faces.
-    const glm::dvec3 start = ray.at(t_enter);
-    std::array<int, 3> cell{};
-    std::array<int, 3> step{};
-    for (int a = 0; a < 3; ++a) {
-        const std::size_t ua = static_cast<std::size_t>(a);
-        if (!bounded[ua]) {
-            continue;
-        }
-        const double f = std::floor((start[a] - g.origin[a]) / g.spacing[a]);
-        cell[ua] = static_cast<int>(std::clamp(f, 0.0, static_cast<double>(cells[ua] - 1)));
-        step[ua] = ray.direction[a] > 0.0 ? 1 : (ray.direction[a] < 0.0 ? -1 : 0);
-    }
-    auto boundary_t = [&](int a) {
-        const std::size_t ua = static_cast<std::size_t>(a);
-        if (!bounded[ua] || step[ua] == 0) {
-            return kInf;
-        }
-        const int face = cell[ua] + (step[ua] > 0 ? 1 : 0);
-        return (g.origin[a] + g.spacing[a] * static_cast<double>(face) - ray.origin[a]) /
-               ray.direction[a];
-    };
-
     FieldQuery query{*this, ray, settings.probe, {}};
     query.result.free_until = ray.t_min;
     TriedProbes tried;
-    double cell_enter = t_enter;
-    const int max_cells = cells[0] + cells[1] + cells[2] + 3;
-    for (int visited = 0; visited < max_cells; ++visited) {
-        const std::array<double, 3> next{boundary_t(0), boundary_t(1), boundary_t(2)};
-        const double cell_leave = std::min({next[0], next[1], next[2], t_exit});
+    while (const std::optional<GridCellSpan> span = walk.next()) {
         // A cell the ray already left behind the proven-free distance has nothing to add.
-        if (cell_leave >= query.result.free_until || visited == 0) {
-            const glm::dvec3 entry = ray.at(std::max(cell_enter, query.result.free_until));
+        if (span->t_leave >= query.result.free_until || span->first) {
+            const glm::dvec3 entry = ray.at(std::max(span->t_enter, query.result.free_until));
+            std::array<std::size_t, 8> corner_index{};
+            const std::size_t corner_count = grid_cell_corners(grid(), span->cell, corner_index);
             std::array<Candidate, 8> corners{};
-            std::size_t corner_count = 0;
-            for (int dz = 0; dz <= (bounded[2] ? 1 : 0); ++dz) {
-                for (int dy = 0; dy <= (bounded[1] ? 1 : 0); ++dy) {
-                    for (int dx = 0; dx <= (bounded[0] ? 1 : 0); ++dx) {
-                        const std::size_t index = static_cast<std::size_t>(cell[0] + dx) +
-                                                  static_cast<std::size_t>(g.counts[0]) *
-                                                      (static_cast<std::size_t>(cell[1] + dy) +
-                                                       static_cast<std::size_t>(g.counts[1]) *
-                                                           static_cast<std::size_t>(cell[2] + dz));
-                        const glm::dvec3 to = probes_[index].position - entry;
-                        corners[corner_count++] = Candidate{glm::dot(to, to), index};
-                    }
-                }
+            for (std::size_t k = 0; k < corner_count; ++k) {
+                const glm::dvec3 to = probes_[corner_index[k]].position - entry;
+                corners[k] = Candidate{glm::dot(to, to), corner_index[k]};
             }
             sort_candidates(corners.data(), corner_count);
             if (ask_in_passes(query, tried, corners.data(), corner_count)) {
                 return query.result;
             }
         }
-        if (cell_leave >= t_exit) {
-            break;
-        }
-        bool left_grid = false;
-        for (int a = 0; a < 3; ++a) {
-            const std::size_t ua = static_cast<std::size_t>(a);
-            if (next[ua] <= cell_leave) {
-                cell[ua] += step[ua];
-                left_grid = left_grid || cell[ua] < 0 || cell[ua] >= cells[ua];
-            }
-        }
-        if (left_grid) {
-            break;
-        }
-        cell_enter = cell_leave;
     }
     query.result.status = TraceStatus::Unknown;
     return query.result;

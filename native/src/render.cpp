@@ -12,6 +12,9 @@
 #include <tbb/partitioner.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/image_exr.hpp"
+#include "lfprobe/image_metadata.hpp"
+#include "lfprobe/probe_lookup.hpp"
 #include "lfprobe/radiance_filter.hpp"
 
 namespace lfprobe {
@@ -260,7 +263,7 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
         throw InputError("render: tile_size must be at least 1");
     }
     const int n = samples_per_axis(settings.samples_per_pixel, "render");
-    // An eye at a probe (DESIGN.md §4): every ray is one texel lookup in that probe; only rays
+    // An eye at a probe (docs/DESIGN.md §4): every ray is one texel lookup in that probe; only rays
     // it cannot answer (UNKNOWN texels) go through the whole field.
     const ViewTracer tracer(field, camera, settings);
     RenderedImage image(camera.width, camera.height);
@@ -396,21 +399,44 @@ RenderStats stats_of(const RenderedImage& image) {
     return s;
 }
 
-RenderStats render_probe_view_to_exr(const std::string& folder, const std::string& camera_path,
-                                     const std::string& output_path, const RenderSettings& settings,
-                                     Progress* progress) {
-    const Camera camera = read_camera_json(camera_path);
-    const ProbeField field = ProbeField::load(folder, progress);
+ImageMetadata probe_view_metadata(const ProbeField& field, const Camera& camera,
+                                  const RenderSettings& settings, const RenderStats& stats) {
+    ImageMetadata m;
+    m.renderer = "lfprobe probe trace";
+    m.source =
+        nlohmann::json{{"probes", field.folder()},
+                       {"storage", field.storage().to_json()},
+                       {"memory_bytes", field.memory_bytes()},
+                       {"resolved_mode", field_mode_name(field.resolve_mode(settings.trace))}};
+    m.camera = camera.to_json();
+    m.settings = render_settings_json(settings);
+    m.stats = stats.to_json();
+    return m;
+}
+
+RenderedImage render_probe_view_to_exr(const ProbeField& field, const Camera& camera,
+                                       const RenderSettings& settings,
+                                       const std::string& output_path, Progress* progress,
+                                       RenderStats* stats) {
+    RenderStats own;
+    RenderStats& s = stats != nullptr ? *stats : own;
+    RenderedImage image = render_probe_view(field, camera, settings, progress, &s);
+    if (!output_path.empty()) {
+        write_rendered_exr(output_path, image, probe_view_metadata(field, camera, settings, s));
+    }
+    return image;
+}
+
+RenderStats render_probe_set_to_exr(const std::string& folder, const Camera& camera,
+                                    const RenderSettings& settings,
+                                    const std::optional<ProbeStorage>& storage,
+                                    const std::string& output_path, Progress* progress) {
+    if (progress != nullptr) {
+        progress->begin_stage("loading probes", 1);
+    }
+    const ProbeField field = ProbeField::load(folder, progress, 0, storage);
     RenderStats stats;
-    const RenderedImage image = render_probe_view(field, camera, settings, progress, &stats);
-    const nlohmann::json metadata{
-        {"renderer", "lfprobe probe trace"},
-        {"probe_set", folder},
-        {"camera", camera.to_json()},
-        {"settings", render_settings_json(settings)},
-        {"resolved_mode", field_mode_name(field.resolve_mode(settings.trace))},
-        {"stats", stats.to_json()}};
-    write_rendered_exr(output_path, image, metadata.dump());
+    (void)render_probe_view_to_exr(field, camera, settings, output_path, progress, &stats);
     return stats;
 }
 

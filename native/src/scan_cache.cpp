@@ -320,4 +320,18 @@ ScanFile read_scan_file_cached(const std::string& path, const ScanReadOptions& o
     return scan;
 }
 
+PointCloud load_scans(const std::vector<std::string>& paths, const ScanReadOptions& read_options,
+                      const MergeOptions& merge_options, const std::string& cache_dir,
+                      Progress* progress) {
+    if (paths.empty()) {
+        throw InputError("load_scans: no scan files given");
+    }
+    std::vector<ScanFile> files;
+    files.reserve(paths.size());
+    for (const std::string& path : paths) {
+        files.push_back(read_scan_file_cached(path, read_options, cache_dir, progress));
+    }
+    return merge_scans(std::move(files), merge_options);
+}
+
 } // namespace lfprobe

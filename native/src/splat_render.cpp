@@ -6,12 +6,15 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <optional>
 
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/image_exr.hpp"
+#include "lfprobe/image_metadata.hpp"
 #include "lfprobe/probe_trace.hpp"
 
 namespace lfprobe {
@@ -185,17 +188,29 @@ nlohmann::json splat_settings_json(const SplatSettings& settings) {
                           {"max_radius_pixels", settings.max_radius_pixels}};
 }
 
-SplatStats render_splats_to_exr(const PointCloud& cloud, const LocalGeometry* geometry,
-                                const std::string& camera_path, const std::string& output_path,
-                                const SplatSettings& settings, Progress* progress) {
-    const Camera camera = read_camera_json(camera_path);
+SplatStats splat_cloud_to_exr(const PointCloud& cloud, const Camera& camera,
+                              const SplatSettings& settings, const std::string& output_path,
+                              Progress* progress, double* geometry_seconds) {
+    std::optional<LocalGeometry> geometry;
+    if (settings.fixed_radius <= 0.0) {
+        const auto start = std::chrono::steady_clock::now();
+        geometry = estimate_local_geometry(cloud, {}, progress);
+        if (geometry_seconds != nullptr) {
+            *geometry_seconds =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        }
+    } else if (geometry_seconds != nullptr) {
+        *geometry_seconds = 0.0;
+    }
     SplatStats stats;
-    const RenderedImage image = render_splats(cloud, geometry, camera, settings, progress, &stats);
-    const nlohmann::json metadata{{"renderer", "lfprobe point splats"},
-                                  {"camera", camera.to_json()},
-                                  {"settings", splat_settings_json(settings)},
-                                  {"stats", stats.to_json()}};
-    write_rendered_exr(output_path, image, metadata.dump());
+    const RenderedImage image =
+        render_splats(cloud, geometry ? &*geometry : nullptr, camera, settings, progress, &stats);
+    ImageMetadata metadata;
+    metadata.renderer = "lfprobe point splats";
+    metadata.camera = camera.to_json();
+    metadata.settings = splat_settings_json(settings);
+    metadata.stats = stats.to_json();
+    write_rendered_exr(output_path, image, metadata);
     return stats;
 }
 

@@ -1,4 +1,4 @@
-// Blender's camera model (DESIGN.md §3) as Cycles renders it: fields of view, sensor fit,
+// Blender's camera model (docs/DESIGN.md §3) as Cycles renders it: fields of view, sensor fit,
 // shift, pixel-centre rays, the top row, equirectangular panoramas and JSON errors.
 #include <cmath>
 #include <filesystem>

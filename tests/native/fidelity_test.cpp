@@ -1,4 +1,4 @@
-// The image's fidelity (DESIGN.md §5): samples per pixel, the bilinear radiance
+// The image's fidelity (docs/DESIGN.md §5): samples per pixel, the bilinear radiance
 // filter and the blending of probes. Hard cases by name: a surface of one colour, a
 // silhouette in front of a wall, the order of the probes, the thread count, and the paper's
 // one-sample first-hit image that spp 1, nearest, blend 1 must reproduce bit for bit.

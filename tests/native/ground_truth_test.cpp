@@ -10,6 +10,7 @@
 #include <tbb/task_arena.h>
 
 #include "lfprobe/ground_truth.hpp"
+#include "lfprobe/image_exr.hpp"
 #include "lfprobe/mesh_reader.hpp"
 #include "lfprobe/probe_trace.hpp"
 #include "test_data.hpp"

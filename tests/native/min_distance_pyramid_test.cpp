@@ -1,4 +1,4 @@
-// Property tests of the coarse min-distance levels (DESIGN.md §4).
+// Property tests of the coarse min-distance levels (docs/DESIGN.md §4).
 #include <cmath>
 #include <limits>
 #include <random>

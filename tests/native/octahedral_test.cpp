@@ -1,4 +1,4 @@
-// Hard cases of the octahedral mapping (DESIGN.md §3).
+// Hard cases of the octahedral mapping (docs/DESIGN.md §3).
 #include <algorithm>
 #include <cmath>
 #include <random>

@@ -1,4 +1,4 @@
-// Probe bakes from clouds with a known answer (DESIGN.md §4).
+// Probe bakes from clouds with a known answer (docs/DESIGN.md §4).
 #include <algorithm>
 #include <cmath>
 #include <vector>

@@ -1,4 +1,4 @@
-// Several probes (DESIGN.md §4 "Many probes"): grid walks with any counts, cameras outside the
+// Several probes (docs/DESIGN.md §4 "Many probes"): grid walks with any counts, cameras outside the
 // grid, rays through probe centres, nearest-first tracing that carries the free distance, and
 // loading a baked set from disk.
 #include <algorithm>

@@ -1,4 +1,4 @@
-// One ray against one probe (DESIGN.md §4): the hard cases of the octant walk and the three
+// One ray against one probe (docs/DESIGN.md §4): the hard cases of the octant walk and the three
 // answers kept apart.
 #include <algorithm>
 #include <cmath>
@@ -13,6 +13,7 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/min_distance_pyramid.hpp"
 #include "lfprobe/octahedral.hpp"
+#include "lfprobe/probe_lookup.hpp"
 #include "lfprobe/probe_storage.hpp"
 #include "lfprobe/probe_trace.hpp"
 #include "trace_scenes.hpp"

@@ -1,4 +1,4 @@
-// Rendering views against a probe field (DESIGN.md §4): accuracy against an analytic scene for
+// Rendering views against a probe field (docs/DESIGN.md §4): accuracy against an analytic scene for
 // probes baked from a dense cloud, determinism over thread counts, EXR output, progress and
 // cancellation.
 #include <algorithm>
@@ -11,11 +11,14 @@
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/image_exr.hpp"
 #include "lfprobe/probe_bake.hpp"
 #include "lfprobe/probe_exr.hpp"
+#include "lfprobe/probe_lookup.hpp"
 #include "lfprobe/probe_set.hpp"
 #include "lfprobe/radiance_filter.hpp"
 #include "lfprobe/render.hpp"
@@ -257,8 +260,8 @@ TEST(Render, FromAProbeSetFolderAndACameraFileToAnExr) {
     const std::string camera_path = (folder / "camera.json").string();
     write_file_atomically(camera_path, camera.to_json().dump());
     const std::string out = (folder / "view.exr").string();
-    const RenderStats stats =
-        render_probe_view_to_exr((folder / "probes").string(), camera_path, out);
+    const RenderStats stats = render_probe_set_to_exr((folder / "probes").string(),
+                                                      read_camera_json(camera_path), {}, {}, out);
     EXPECT_EQ(stats.rays, 24u * 16u);
     EXPECT_GT(stats.hits, stats.rays / 2);
     std::string metadata;
@@ -267,11 +270,30 @@ TEST(Render, FromAProbeSetFolderAndACameraFileToAnExr) {
     const nlohmann::json m = nlohmann::json::parse(metadata);
     EXPECT_EQ(m.at("stats").at("hits").get<std::uint64_t>(), stats.hits);
     EXPECT_EQ(m.at("settings").at("mode"), "auto");
+    EXPECT_EQ(m.at("renderer"), "lfprobe probe trace");
+    EXPECT_EQ(m.at("probes"), (folder / "probes").string());
+    EXPECT_EQ(m.at("resolved_mode"), "grid");
+    EXPECT_TRUE(m.contains("storage") && m.contains("memory_bytes") && m.contains("camera"));
+
+    // A field loaded once and rendered to a file (the add-on's batch render) writes the same
+    // metadata as the folder-to-file render (the command line), timings aside.
+    const ProbeField field = ProbeField::load((folder / "probes").string());
+    const std::string again = (folder / "again.exr").string();
+    (void)render_probe_view_to_exr(field, camera, {}, again);
+    std::string metadata_again;
+    (void)read_rendered_exr(again, &metadata_again);
+    nlohmann::json a = nlohmann::json::parse(metadata_again);
+    nlohmann::json b = m;
+    for (nlohmann::json* j : {&a, &b}) {
+        (*j)["stats"].erase("seconds");
+        (*j)["stats"].erase("rays_per_second");
+    }
+    EXPECT_EQ(a, b);
     std::filesystem::remove_all(folder);
 }
 
 TEST(Render, EyeAtAProbeIsOneLookupPerRay) {
-    // DESIGN.md §4: with the eye at a probe every ray is a single texel lookup in that probe,
+    // docs/DESIGN.md §4: with the eye at a probe every ray is a single texel lookup in that probe,
     // in grid mode as in nearest mode, and the answer is the lookup's.
     const ProbeField& field = baked_box_room();
     const glm::dvec3 eye = field.probe(3).position;

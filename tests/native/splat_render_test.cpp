@@ -1,4 +1,4 @@
-// The z-buffered point splat baseline (DESIGN.md §6): nearest point wins whatever the order,
+// The z-buffered point splat baseline (docs/DESIGN.md §6): nearest point wins whatever the order,
 // depths match the analytic scene, the output is the same for any thread count.
 #include <algorithm>
 #include <cmath>
@@ -11,9 +11,11 @@
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/image_exr.hpp"
 #include "lfprobe/probe_exr.hpp"
 #include "lfprobe/splat_render.hpp"
 #include "trace_scenes.hpp"
@@ -153,12 +155,15 @@ TEST(Splat, CameraFileToExr) {
         Camera::look_at({0.0, 0.0, 1.2}, {1.0, 0.2, 1.0}, 32, 24, 20.0).to_json().dump());
     SplatSettings fixed;
     fixed.fixed_radius = 0.05;
-    const SplatStats stats =
-        render_splats_to_exr(cloud, nullptr, camera_path, (folder / "splats.exr").string(), fixed);
+    const SplatStats stats = splat_cloud_to_exr(cloud, read_camera_json(camera_path), fixed,
+                                                (folder / "splats.exr").string());
     EXPECT_EQ(stats.covered, 32u * 24u);
     std::string metadata;
     const RenderedImage image = read_rendered_exr((folder / "splats.exr").string(), &metadata);
     EXPECT_EQ(image.height, 24);
-    EXPECT_NE(metadata.find("point splats"), std::string::npos);
+    const nlohmann::json m = nlohmann::json::parse(metadata);
+    EXPECT_EQ(m.at("renderer"), "lfprobe point splats");
+    EXPECT_EQ(m.at("settings").at("fixed_radius"), 0.05);
+    EXPECT_EQ(m.at("stats").at("covered"), 32u * 24u);
     std::filesystem::remove_all(folder);
 }

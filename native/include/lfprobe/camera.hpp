@@ -1,4 +1,4 @@
-// Blender's camera model (DESIGN.md §3), as Cycles renders it: perspective and equirectangular
+// Blender's camera model (docs/DESIGN.md §3), as Cycles renders it: perspective and equirectangular
 // panorama cameras, read from the small JSON file the add-on writes from a Blender camera.
 //
 // Image coordinates: pixel (x, y) covers [x, x+1) × [y, y+1) with y = 0 the TOP row (EXR
@@ -48,7 +48,7 @@ struct Camera {
     double pixel_aspect_x = 1.0; // scene.render.pixel_aspect_x
     double pixel_aspect_y = 1.0;
 
-    // Reads the JSON of DESIGN.md §3; `where` names the source in errors. Omitted keys keep
+    // Reads the JSON of docs/DESIGN.md §3; `where` names the source in errors. Omitted keys keep
     // Blender's defaults. Throws InputError naming `where` and the offending key.
     [[nodiscard]] static Camera from_json(const nlohmann::json& j, const std::string& where);
     // A perspective camera at `eye` looking at `target`, world +Z up (as a Blender camera

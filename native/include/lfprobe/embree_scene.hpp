@@ -1,5 +1,5 @@
 // A Mesh in Embree 3 for closest-hit queries: the reference geometry of ground truth renders,
-// mesh bakes and simulated scans (DESIGN.md §4). One triangle geometry per mesh object, built
+// mesh bakes and simulated scans (docs/DESIGN.md §4). One triangle geometry per mesh object, built
 // with RTC_SCENE_FLAG_ROBUST so that rays along shared edges do not slip through.
 #pragma once
 

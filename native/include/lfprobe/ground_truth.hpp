@@ -1,4 +1,4 @@
-// Ground truth views (DESIGN.md §4 "Ground truth and simulated scans"): Embree renders the
+// Ground truth views (docs/DESIGN.md §4 "Ground truth and simulated scans"): Embree renders the
 // reference mesh with the same camera rays as the probe renderer (Camera::local_pixel_ray with
 // the mesh's world offset) and the same quantity the probes hold, the unlit base colour.
 // Every pixel is computed on its own from the same inputs, so the image is bit-identical for
@@ -6,13 +6,14 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 
 #include <nlohmann/json.hpp>
 
 #include "lfprobe/camera.hpp"
 #include "lfprobe/embree_scene.hpp"
-#include "lfprobe/image_exr.hpp"
 #include "lfprobe/progress.hpp"
+#include "lfprobe/rendered_image.hpp"
 #include "lfprobe/throughput.hpp"
 
 namespace lfprobe {
@@ -48,6 +49,13 @@ struct GroundTruthStats {
                                                 const GroundTruthSettings& settings = {},
                                                 Progress* progress = nullptr,
                                                 GroundTruthStats* stats = nullptr);
+
+// The ground truth render every caller runs: renders `scene` (the mesh read from `mesh_path`)
+// and writes the EXR to `output_path` (atomically) with the one metadata layout
+// (image_metadata.hpp). Returns the stats.
+GroundTruthStats ground_truth_to_exr(const EmbreeScene& scene, const std::string& mesh_path,
+                                     const Camera& camera, const GroundTruthSettings& settings,
+                                     const std::string& output_path, Progress* progress = nullptr);
 
 // Primary-ray throughput of Embree on a view, for the "probe trace vs Embree" ratio: the
 // pixel-centre rays are generated first, then only rtcIntersect1 over all of them is timed,

@@ -1,5 +1,5 @@
 // A triangle mesh scene as the ground truth renderer, the mesh bake and the simulated scanner
-// use it (DESIGN.md §4): float positions in a local frame (world = world_offset + position),
+// use it (docs/DESIGN.md §4): float positions in a local frame (world = world_offset + position),
 // per-corner texture coordinates, colours and normals when the file has them, and per-triangle
 // material and object ids. Colours are linear; the quantity rendered is the unlit base colour
 // texture × material colour × vertex colour.

@@ -1,4 +1,4 @@
-// Probes baked from a mesh with Embree (DESIGN.md §4 "Bake from a mesh"): the reference that
+// Probes baked from a mesh with Embree (docs/DESIGN.md §4 "Bake from a mesh"): the reference that
 // separates tracing error from scan error. One ray per texel centre from the probe gives the
 // exact radial distance, the surface normal and the base colour; a ray that escapes leaves the
 // texel empty (+inf). Nothing is ever unknown: the mesh is the whole truth.

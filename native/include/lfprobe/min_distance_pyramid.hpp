@@ -1,4 +1,4 @@
-// The coarse levels of a probe (DESIGN.md §4): each coarse texel holds the minimum radial
+// The coarse levels of a probe (docs/DESIGN.md §4): each coarse texel holds the minimum radial
 // distance of the fine texels it covers, a conservative bound that lets a trace skip texels
 // whose every surface lies beyond the ray. Empty texels (+inf) do not lower the bound; unknown
 // texels (NaN) lower it to 0, so a coarse texel over unknown data is never skipped and the

@@ -1,4 +1,4 @@
-// The octahedral map of DESIGN.md §3, the one mapping between directions and texels that every
+// The octahedral map of docs/DESIGN.md §3, the one mapping between directions and texels that every
 // part of lfprobe uses. Z is the fold axis; the upper hemisphere fills the inner diamond, the
 // lower hemisphere the four outer triangles. Texel (x, y) is pixel column x, scanline y.
 #pragma once
@@ -20,7 +20,7 @@ namespace lfprobe::oct {
 // texels): this constant over N.
 inline constexpr double kTexelAngleTimesN = 3.5449077018110318;
 
-// s(a) of DESIGN.md: -0.0 maps to +1 (copysign and signbit would give -1).
+// s(a) of docs/DESIGN.md: -0.0 maps to +1 (copysign and signbit would give -1).
 [[nodiscard]] constexpr float sign_not_zero(float a) {
     return a >= 0.0f ? 1.0f : -1.0f;
 }

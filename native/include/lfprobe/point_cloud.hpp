@@ -2,6 +2,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,7 +19,7 @@ struct ScanSource {
     bool has_scanner = false;
 };
 
-// Positions are float32 relative to a double-precision world offset (DESIGN.md §3): a point's
+// Positions are float32 relative to a double-precision world offset (docs/DESIGN.md §3): a point's
 // world position is world_offset + position, computed in double.
 struct PointCloud {
     glm::dvec3 world_offset{0.0};
@@ -37,5 +38,17 @@ struct PointCloud {
     [[nodiscard]] bool has_colors() const { return !colors.empty(); }
     [[nodiscard]] bool has_normals() const { return !normals.empty(); }
 };
+
+// A cloud from arrays handed over in its local frame (the Blender add-on's objects): checks
+// what a file reader would (finite positions, colours and normals one per point, every scan
+// index naming one of `scanners`), fills the per-scan counts. `scanners`: one entry per scan,
+// its position in the local frame or none; an empty list is one scan without a scanner.
+// `scan_index` empty: every point is scan 0. InputError names the first thing that does not fit.
+[[nodiscard]] PointCloud cloud_from_parts(std::vector<glm::vec3> positions,
+                                          std::vector<glm::vec3> colors,
+                                          std::vector<glm::vec3> normals,
+                                          std::vector<std::uint32_t> scan_index,
+                                          const std::vector<std::optional<glm::dvec3>>& scanners,
+                                          const glm::dvec3& world_offset);
 
 } // namespace lfprobe

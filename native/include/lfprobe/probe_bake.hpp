@@ -1,4 +1,4 @@
-// Baking probes from a point cloud (DESIGN.md §4): every point is projected into each probe's
+// Baking probes from a point cloud (docs/DESIGN.md §4): every point is projected into each probe's
 // octahedral map and splatted over the texels its footprint covers at that distance (a point
 // stands for a patch of about the local spacing), the nearest surface winning per texel; small
 // holes are filled by pull-push and marked as inferred, large holes stay unknown.

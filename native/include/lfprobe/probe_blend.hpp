@@ -1,4 +1,4 @@
-// The colour of a HIT (DESIGN.md §5): read from the probe that answered through
+// The colour of a HIT (docs/DESIGN.md §5): read from the probe that answered through
 // its radiance filter (radiance_filter.hpp) and, where other probes see the same surface point,
 // blended with theirs.
 //

@@ -1,4 +1,4 @@
-// One probe as one OpenEXR file (DESIGN.md §3): R, G, B radiance and A confidence (half),
+// One probe as one OpenEXR file (docs/DESIGN.md §3): R, G, B radiance and A confidence (half),
 // Z radial distance (float32; NaN unknown, +inf empty), N.X, N.Y, N.Z normals (half).
 // Texel (x, y) is pixel column x, scanline y. Written to a temporary name and renamed.
 #pragma once

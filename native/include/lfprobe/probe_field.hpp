@@ -1,4 +1,4 @@
-// A loaded probe set ready for tracing (DESIGN.md §4 "Many probes"): every probe's maps and
+// A loaded probe set ready for tracing (docs/DESIGN.md §4 "Many probes"): every probe's maps and
 // its coarse min-distance levels, and the two ways of asking several probes about one ray.
 //
 // Nearest: the probes nearest the ray's origin are tried in order of distance (up to
@@ -82,6 +82,8 @@ public:
                const glm::dvec3& world_offset = glm::dvec3(0.0));
 
     [[nodiscard]] const ProbeSetManifest& manifest() const { return manifest_; }
+    // The folder it was loaded from; empty for probes built in memory.
+    [[nodiscard]] const std::string& folder() const { return folder_; }
     // How the probes are held in memory.
     [[nodiscard]] const ProbeStorage& storage() const { return manifest_.storage; }
     [[nodiscard]] const glm::dvec3& world_offset() const { return manifest_.world_offset; }
@@ -117,6 +119,7 @@ private:
     void check_placement() const;
 
     ProbeSetManifest manifest_;
+    std::string folder_;
     std::vector<ProbeMap> probes_;
     std::vector<MinDistancePyramid> levels_;
 };

@@ -1,4 +1,4 @@
-// A probe set on disk (DESIGN.md §3): a folder with manifest.json and one EXR per probe.
+// A probe set on disk (docs/DESIGN.md §3): a folder with manifest.json and one EXR per probe.
 // The manifest holds the format version, the world offset, the placement (positions, or grid
 // origin/spacing/counts), per-probe resolution and coverage, the bake settings and the
 // sources with their hashes. It is written last, so a folder without it is no probe set.

@@ -1,7 +1,7 @@
 // How a loaded probe holds its channels in memory (issue 7: "storage sized to the data").
 //
 // A probe is baked and written at full precision (half RGBA, float32 distance, half normals:
-// DESIGN.md §3), but a trace reads only three things per texel: the radial distance (every
+// docs/DESIGN.md §3), but a trace reads only three things per texel: the radial distance (every
 // texel it visits), and at a hit the radiance and the normal's side. Scan colours are 8-bit
 // sRGB, a scanner measures range to millimetres, and the face test needs a normal to about a
 // degree; the confidence channel is never read. The compact form keeps exactly that: distance

@@ -1,4 +1,4 @@
-// How a HIT's radiance is read from the probe that saw it (the fidelity of DESIGN.md §5).
+// How a HIT's radiance is read from the probe that saw it (the fidelity of docs/DESIGN.md §5).
 // Visibility is decided texel by texel (probe_trace.hpp); the colour of the decided surface point
 // may then be reconstructed from more than the one texel met.
 //

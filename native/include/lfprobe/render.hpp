@@ -1,21 +1,24 @@
-// Rendering a view by tracing camera rays against a probe field (DESIGN.md §1, §4): one ray
-// per pixel through the camera of DESIGN.md §3, in tiles on all cores. Every pixel is computed
+// Rendering a view by tracing camera rays against a probe field (docs/DESIGN.md §1, §4): one ray
+// per pixel through the camera of docs/DESIGN.md §3, in tiles on all cores. Every pixel is computed
 // on its own from the same inputs, so the image is bit-identical for any number of threads.
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "lfprobe/camera.hpp"
-#include "lfprobe/image_exr.hpp"
 #include "lfprobe/probe_field.hpp"
 #include "lfprobe/progress.hpp"
+#include "lfprobe/rendered_image.hpp"
 #include "lfprobe/throughput.hpp"
 
 namespace lfprobe {
+
+struct ImageMetadata;
 
 struct RenderSettings {
     FieldTraceSettings trace;
@@ -30,8 +33,8 @@ struct RenderSettings {
     int samples_per_pixel = 1;
 };
 
-// Counts that do not depend on the clock (DESIGN.md §6), and the time it took. hits, misses and
-// unknown count pixels by their centre ray; rays and steps count every ray traced.
+// Counts that do not depend on the clock (docs/DESIGN.md §6), and the time it took. hits, misses
+// and unknown count pixels by their centre ray; rays and steps count every ray traced.
 struct RenderStats {
     std::uint64_t rays = 0;
     std::uint64_t hits = 0;
@@ -89,12 +92,26 @@ probe_trace_throughput(const ProbeField& field, const Camera& camera,
 // The counts of an image already rendered (status and steps channels; seconds left 0).
 [[nodiscard]] RenderStats stats_of(const RenderedImage& image);
 
-// Loads the probe set in `folder`, reads the camera JSON, renders, and writes the EXR to
-// `output_path` with the camera, the settings and the stats as metadata. Returns the stats.
-RenderStats render_probe_view_to_exr(const std::string& folder, const std::string& camera_path,
-                                     const std::string& output_path,
-                                     const RenderSettings& settings = {},
-                                     Progress* progress = nullptr);
+// The render every caller runs (the CLI, the Blender add-on's F12 and batch render, the
+// report): renders `field` from `camera` and, when `output_path` is not empty, writes the EXR
+// with probe_view_metadata. Returns the image; fills `stats` when given.
+RenderedImage render_probe_view_to_exr(const ProbeField& field, const Camera& camera,
+                                       const RenderSettings& settings,
+                                       const std::string& output_path, Progress* progress = nullptr,
+                                       RenderStats* stats = nullptr);
+
+// Loads the probe set in `folder` (held in memory as `storage` says; none: as its manifest
+// says), then render_probe_view_to_exr. Returns the stats.
+RenderStats render_probe_set_to_exr(const std::string& folder, const Camera& camera,
+                                    const RenderSettings& settings,
+                                    const std::optional<ProbeStorage>& storage,
+                                    const std::string& output_path, Progress* progress = nullptr);
+
+// What a probe view's EXR records: the set's folder, how its probes are held and their memory,
+// the mode the trace resolved to, the camera, the settings and the stats.
+[[nodiscard]] ImageMetadata probe_view_metadata(const ProbeField& field, const Camera& camera,
+                                                const RenderSettings& settings,
+                                                const RenderStats& stats);
 
 // The settings as JSON (for metadata and reports).
 [[nodiscard]] nlohmann::json render_settings_json(const RenderSettings& settings);

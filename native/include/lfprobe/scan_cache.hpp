@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "lfprobe/scan_reader.hpp"
 
@@ -16,5 +17,12 @@ namespace lfprobe {
                                              const ScanReadOptions& options,
                                              const std::string& cache_dir,
                                              Progress* progress = nullptr, bool* hit = nullptr);
+
+// The scan loading every caller runs: reads each of `paths` (through the cache in `cache_dir`;
+// empty: no cache) and merges them into one cloud. InputError when `paths` is empty.
+[[nodiscard]] PointCloud load_scans(const std::vector<std::string>& paths,
+                                    const ScanReadOptions& read_options,
+                                    const MergeOptions& merge_options, const std::string& cache_dir,
+                                    Progress* progress = nullptr);
 
 } // namespace lfprobe

@@ -1,4 +1,4 @@
-// A simulated terrestrial laser scanner (DESIGN.md §4 "Ground truth and simulated scans"): the
+// A simulated terrestrial laser scanner (docs/DESIGN.md §4 "Ground truth and simulated scans"): the
 // reference mesh scanned from a position on a regular azimuth/elevation pattern with range
 // noise, written as a FARO-style "x y z r g b" file that the scan readers take back in.
 //

@@ -1,4 +1,4 @@
-// The geometry-free baseline the probes must beat (DESIGN.md §6): the raw point cloud drawn as
+// The geometry-free baseline the probes must beat (docs/DESIGN.md §6): the raw point cloud drawn as
 // z-buffered screen-space squares, each the size of its point's patch (the local spacing) at
 // its depth, nearest point winning per pixel. Same camera and same image channels as a probe
 // trace; covered pixels are HIT, the rest MISS. Deterministic for any thread count: every
@@ -12,10 +12,10 @@
 #include <nlohmann/json.hpp>
 
 #include "lfprobe/camera.hpp"
-#include "lfprobe/image_exr.hpp"
 #include "lfprobe/local_geometry.hpp"
 #include "lfprobe/point_cloud.hpp"
 #include "lfprobe/progress.hpp"
+#include "lfprobe/rendered_image.hpp"
 
 namespace lfprobe {
 
@@ -51,11 +51,13 @@ struct SplatStats {
                                           Progress* progress = nullptr,
                                           SplatStats* stats = nullptr);
 
-// Reads the camera JSON, renders and writes the EXR to `output_path` (atomically) with the
-// camera, the settings and the stats as metadata. Returns the stats.
-SplatStats render_splats_to_exr(const PointCloud& cloud, const LocalGeometry* geometry,
-                                const std::string& camera_path, const std::string& output_path,
-                                const SplatSettings& settings = {}, Progress* progress = nullptr);
+// The splat render every caller runs: estimates the local geometry that sizes the splats
+// (unless settings.fixed_radius > 0), renders and writes the EXR to `output_path`
+// (atomically) with the one metadata layout (image_metadata.hpp). Returns the stats; the
+// geometry estimate's time goes to `geometry_seconds` when given.
+SplatStats splat_cloud_to_exr(const PointCloud& cloud, const Camera& camera,
+                              const SplatSettings& settings, const std::string& output_path,
+                              Progress* progress = nullptr, double* geometry_seconds = nullptr);
 
 // The settings as JSON (for metadata and reports).
 [[nodiscard]] nlohmann::json splat_settings_json(const SplatSettings& settings);

@@ -1,4 +1,4 @@
-// The three states a probe texel can be in (DESIGN.md §3), and how a distance encodes them.
+// The three states a probe texel can be in (docs/DESIGN.md §3), and how a distance encodes them.
 #pragma once
 
 #include <cmath>

@@ -1,4 +1,4 @@
-// Primary-ray throughput measured one way for every tracer (DESIGN.md §6): the camera's
+// Primary-ray throughput measured one way for every tracer (docs/DESIGN.md §6): the camera's
 // pixel-centre rays made once beforehand, then only the traces timed, fastest of `repeats`, on
 // the calling task arena's threads. Ray generation and writing pixels are not in the figure.
 #pragma once

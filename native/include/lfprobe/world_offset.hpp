@@ -1,5 +1,5 @@
-// The one rule for choosing a world offset (DESIGN.md §3), shared by scans and meshes so that a
-// mesh and the scans simulated from it land in the same local frame: no offset for data within
+// The one rule for choosing a world offset (docs/DESIGN.md §3), shared by scans and meshes so that
+// a mesh and the scans simulated from it land in the same local frame: no offset for data within
 // ±1024 units of the origin (float32 keeps sub-0.1 mm there), else the bounding-box centre
 // rounded to whole units.
 #pragma once

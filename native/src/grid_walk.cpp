@@ -1,0 +1,143 @@
+#include "lfprobe/grid_walk.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <utility>
+
+namespace lfprobe {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+} // namespace
+
+GridCell grid_cell_containing(const ProbeGrid& grid, const glm::dvec3& point) {
+    GridCell cell{};
+    for (int a = 0; a < 3; ++a) {
+        const auto ua = static_cast<std::size_t>(a);
+        if (grid.counts[ua] < 2) {
+            continue; // one layer: cell 0
+        }
+        const double f = std::floor((point[a] - grid.origin[a]) / grid.spacing[a]);
+        cell[ua] = static_cast<int>(
+            std::isfinite(f) ? std::clamp(f, 0.0, static_cast<double>(grid.counts[ua] - 2)) : 0.0);
+    }
+    return cell;
+}
+
+std::size_t grid_cell_corners(const ProbeGrid& grid, const GridCell& cell,
+                              std::array<std::size_t, 8>& corners) {
+    const auto extent = [&](std::size_t a) { return grid.counts[a] > 1 ? 1 : 0; };
+    std::size_t count = 0;
+    for (int dz = 0; dz <= extent(2); ++dz) {
+        for (int dy = 0; dy <= extent(1); ++dy) {
+            for (int dx = 0; dx <= extent(0); ++dx) {
+                corners[count++] = static_cast<std::size_t>(cell[0] + dx) +
+                                   static_cast<std::size_t>(grid.counts[0]) *
+                                       (static_cast<std::size_t>(cell[1] + dy) +
+                                        static_cast<std::size_t>(grid.counts[1]) *
+                                            static_cast<std::size_t>(cell[2] + dz));
+            }
+        }
+    }
+    return count;
+}
+
+GridWalk::GridWalk(const ProbeGrid& grid, const Ray& ray) : grid_(grid), ray_(ray) {
+    double t_enter = ray.t_min;
+    double t_exit = ray.t_max;
+    for (int a = 0; a < 3; ++a) {
+        const auto ua = static_cast<std::size_t>(a);
+        bounded_[ua] = grid.counts[ua] > 1;
+        cells_[ua] = bounded_[ua] ? grid.counts[ua] - 1 : 1;
+        if (!bounded_[ua]) {
+            continue;
+        }
+        const double lo = grid.origin[a];
+        const double hi =
+            grid.origin[a] + grid.spacing[a] * static_cast<double>(grid.counts[ua] - 1);
+        const double o = ray.origin[a];
+        const double d = ray.direction[a];
+        if (d == 0.0) {
+            if (o < lo || o > hi) {
+                t_enter = kInf; // parallel to the slab and outside it
+            }
+            continue;
+        }
+        double t0 = (lo - o) / d;
+        double t1 = (hi - o) / d;
+        if (t0 > t1) {
+            std::swap(t0, t1);
+        }
+        t_enter = std::max(t_enter, t0);
+        t_exit = std::min(t_exit, t1);
+    }
+    meets_ = t_enter <= t_exit;
+    done_ = !meets_;
+    if (!meets_) {
+        return;
+    }
+    // The cell where the ray is inside the box, clamped at the faces.
+    const glm::dvec3 start = ray.at(t_enter);
+    for (int a = 0; a < 3; ++a) {
+        const auto ua = static_cast<std::size_t>(a);
+        if (!bounded_[ua]) {
+            continue;
+        }
+        const double f = std::floor((start[a] - grid.origin[a]) / grid.spacing[a]);
+        cell_[ua] = static_cast<int>(std::clamp(f, 0.0, static_cast<double>(cells_[ua] - 1)));
+        step_[ua] = ray.direction[a] > 0.0 ? 1 : (ray.direction[a] < 0.0 ? -1 : 0);
+    }
+    t_exit_ = t_exit;
+    cell_enter_ = t_enter;
+    max_cells_ = cells_[0] + cells_[1] + cells_[2] + 3;
+}
+
+double GridWalk::boundary_t(int axis) const {
+    const auto ua = static_cast<std::size_t>(axis);
+    if (!bounded_[ua] || step_[ua] == 0) {
+        return kInf;
+    }
+    const int face = cell_[ua] + (step_[ua] > 0 ? 1 : 0);
+    return (grid_.origin[axis] + grid_.spacing[axis] * static_cast<double>(face) -
+            ray_.origin[axis]) /
+           ray_.direction[axis];
+}
+
+std::optional<GridCellSpan> GridWalk::next() {
+    if (done_) {
+        return std::nullopt;
+    }
+    if (visited_ > 0) {
+        // Step out of the cell handed out last, through the faces it left by.
+        if (cell_leave_ >= t_exit_) {
+            done_ = true;
+            return std::nullopt;
+        }
+        bool left_grid = false;
+        for (std::size_t a = 0; a < 3; ++a) {
+            if (next_[a] <= cell_leave_) {
+                cell_[a] += step_[a];
+                left_grid = left_grid || cell_[a] < 0 || cell_[a] >= cells_[a];
+            }
+        }
+        if (left_grid) {
+            done_ = true;
+            return std::nullopt;
+        }
+        cell_enter_ = cell_leave_;
+    }
+    if (visited_ >= max_cells_) {
+        done_ = true;
+        return std::nullopt;
+    }
+    next_ = {boundary_t(0), boundary_t(1), boundary_t(2)};
+    cell_leave_ = std::min({next_[0], next_[1], next_[2], t_exit_});
+    GridCellSpan span{cell_, cell_enter_, cell_leave_, visited_ == 0};
+    ++visited_;
+    return span;
+}
+
+} // namespace lfprobe

@@ -1,0 +1,60 @@
+#include "lfprobe/point_cloud.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "lfprobe/error.hpp"
+
+namespace lfprobe {
+
+PointCloud cloud_from_parts(std::vector<glm::vec3> positions, std::vector<glm::vec3> colors,
+                            std::vector<glm::vec3> normals, std::vector<std::uint32_t> scan_index,
+                            const std::vector<std::optional<glm::dvec3>>& scanners,
+                            const glm::dvec3& world_offset) {
+    const std::size_t n = positions.size();
+    for (const glm::vec3& p : positions) {
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+            throw InputError("positions: NaN or infinite coordinate");
+        }
+    }
+    auto check_rows = [n](const std::vector<glm::vec3>& v, const char* what) {
+        if (!v.empty() && v.size() != n) {
+            throw InputError(std::string(what) + ": expected an array of shape (" +
+                             std::to_string(n) + ", 3)");
+        }
+    };
+    check_rows(colors, "colors");
+    check_rows(normals, "normals");
+    const std::size_t scan_count = std::max<std::size_t>(1, scanners.size());
+    if (scan_index.empty()) {
+        scan_index.assign(n, 0);
+    } else if (scan_index.size() != n) {
+        throw InputError("scan_index: expected shape (n,)");
+    }
+    for (const std::uint32_t s : scan_index) {
+        if (s >= scan_count) {
+            throw InputError("scan_index: " + std::to_string(s) +
+                             " names no scan (give one scanner entry per scan)");
+        }
+    }
+    PointCloud cloud;
+    cloud.world_offset = world_offset;
+    cloud.positions = std::move(positions);
+    cloud.colors = std::move(colors);
+    cloud.normals = std::move(normals);
+    cloud.scan_index = std::move(scan_index);
+    cloud.scans.resize(scan_count);
+    for (std::size_t s = 0; s < scan_count; ++s) {
+        cloud.scans[s].path = "array";
+        if (s < scanners.size() && scanners[s]) {
+            cloud.scans[s].scanner = *scanners[s];
+            cloud.scans[s].has_scanner = true;
+        }
+    }
+    for (const std::uint32_t s : cloud.scan_index) {
+        ++cloud.scans[s].point_count;
+    }
+    return cloud;
+}
+
+} // namespace lfprobe
