@@ -32,7 +32,10 @@ echo "== native tests =="
 (cd build && ctest --output-on-failure -j"$(nproc)")
 
 echo "== native tests under AddressSanitizer + UndefinedBehaviorSanitizer =="
-cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo -DLFPROBE_SANITIZE=ON \
+# -O1 -g1: what the sanitizers' documentation recommends (line tables for the reports), and half
+# the compile time of -O2 -g.
+cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -g1 -DNDEBUG" -DLFPROBE_SANITIZE=ON \
   -DLFPROBE_PYTHON=OFF -DLFPROBE_WERROR=ON >/dev/null
 cmake --build build-asan -j"$(nproc)" --target lfprobe_tests
 ASAN_OPTIONS="detect_leaks=1:abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \

@@ -44,7 +44,7 @@ struct ChunkPoints {
     ParseFailure failure;
 };
 
-[[nodiscard]] std::string quoted(std::string_view text) {
+[[nodiscard]] std::string in_quotes(std::string_view text) {
     std::string out;
     out.reserve(text.size() + 2);
     out.push_back('\'');
@@ -180,7 +180,7 @@ channels_from_header(const std::vector<std::string_view>& fields) {
     for (std::string_view name : split_fields(columns)) {
         const std::optional<Channel> channel = channel_from_name(name);
         if (!channel) {
-            throw InputError(path + ": options.columns names an unknown column " + quoted(name) +
+            throw InputError(path + ": options.columns names an unknown column " + in_quotes(name) +
                              ": expected x y z r g b i nx ny nz, or _ for a column to ignore");
         }
         channels.push_back(*channel);
@@ -223,7 +223,7 @@ public:
             }
             if (!number_from(fields[0])) {
                 if (seen_count) {
-                    fail(line_number, "non-numeric field " + quoted(fields[0]) +
+                    fail(line_number, "non-numeric field " + in_quotes(fields[0]) +
                                           " in column 1: expected a number");
                 }
                 // A header line before the data: it may name the columns.
@@ -239,7 +239,7 @@ public:
                     const std::optional<std::uint64_t> count = count_from(fields[0]);
                     if (!count) {
                         fail(line_number, "expected a point count (a single whole number), found " +
-                                              quoted(fields[0]));
+                                              in_quotes(fields[0]));
                     }
                     if (!seen_count) {
                         prefix.first_count_line = line_number;
@@ -309,7 +309,7 @@ private:
         for (std::size_t column = 0; column < fields.size(); ++column) {
             const std::optional<double> value = number_from(fields[column]);
             if (!value) {
-                fail(line_number, "non-numeric field " + quoted(fields[column]) + " in column " +
+                fail(line_number, "non-numeric field " + in_quotes(fields[column]) + " in column " +
                                       std::to_string(column + 1) + ": expected a number");
             }
             values.push_back(*value);
@@ -348,8 +348,8 @@ private:
             const auto column = static_cast<std::size_t>(
                 prefix.layout.index(static_cast<Channel>(static_cast<int>(Channel::X) + axis)));
             if (!std::isfinite(values[column])) {
-                fail(line_number, "NaN or infinite coordinate " + quoted(fields[column]) + " in " +
-                                      column_label(column, prefix.channels) +
+                fail(line_number, "NaN or infinite coordinate " + in_quotes(fields[column]) +
+                                      " in " + column_label(column, prefix.channels) +
                                       ": expected a finite number");
             }
             first[axis] = values[column];
@@ -425,7 +425,7 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
             double value = 0.0;
             const char* after = parse_double(p, end, value);
             if (after == nullptr || (after < end && *after != '\n' && !is_separator(*after))) {
-                fail(p, "non-numeric field " + quoted(token_at(p, end)) + " in " +
+                fail(p, "non-numeric field " + in_quotes(token_at(p, end)) + " in " +
                             column_label(column, prefix.channels) + ": expected a number");
                 return;
             }
@@ -455,7 +455,7 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
                 }
                 fail(line_start, "expected a point count (a single whole number) or " +
                                      std::to_string(column_count) + " columns, found " +
-                                     quoted(token));
+                                     in_quotes(token));
                 return;
             }
             fail(line_start, "expected " + std::to_string(column_count) + " columns, found " +
@@ -474,7 +474,7 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
                                     : !std::isfinite(position.y) ? iy
                                                                  : iz;
             const std::string where =
-                quoted(token_at(starts[bad], end)) + " in " + column_label(bad, prefix.channels);
+                in_quotes(token_at(starts[bad], end)) + " in " + column_label(bad, prefix.channels);
             fail(line_start,
                  std::isfinite(values[bad])
                      ? "coordinate " + where + " is too far from the file's first point for float32"
@@ -490,7 +490,7 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
                     static_cast<std::size_t>(colour_columns[static_cast<std::size_t>(c)]);
                 const double value = values[col];
                 if (!(value >= 0.0 && value <= 255.0)) {
-                    fail(line_start, "bad colour value " + quoted(token_at(starts[col], end)) +
+                    fail(line_start, "bad colour value " + in_quotes(token_at(starts[col], end)) +
                                          " in " + column_label(col, prefix.channels) +
                                          ": expected integers 0-255 or floats 0-1");
                     return;
@@ -504,8 +504,8 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
             const auto col = static_cast<std::size_t>(intensity_column);
             const auto intensity = static_cast<float>(values[col]);
             if (!std::isfinite(intensity)) {
-                fail(line_start, "non-finite value " + quoted(token_at(starts[col], end)) + " in " +
-                                     column_label(col, prefix.channels) +
+                fail(line_start, "non-finite value " + in_quotes(token_at(starts[col], end)) +
+                                     " in " + column_label(col, prefix.channels) +
                                      ": expected a finite number");
                 return;
             }
@@ -517,7 +517,7 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
                 const auto col = static_cast<std::size_t>(normal_columns[c]);
                 normal[c] = values[col];
                 if (!std::isfinite(normal[c])) {
-                    fail(line_start, "non-finite value " + quoted(token_at(starts[col], end)) +
+                    fail(line_start, "non-finite value " + in_quotes(token_at(starts[col], end)) +
                                          " in " + column_label(col, prefix.channels) +
                                          ": expected a finite number");
                     return;
