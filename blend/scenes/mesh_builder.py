@@ -1,6 +1,6 @@
 """Triangle soup with per-corner UVs, per-triangle material and object, in a local frame.
 
-World = world_offset + local position (DESIGN.md §3): the builder works in metres near the
+World = world_offset + local position (docs/DESIGN.md §3): the builder works in metres near the
 origin and the offset is added only when a file is written, in double precision, so that a
 georeferenced scene keeps sub-millimetre detail. Every primitive is made of quads wound
 counter-clockwise as seen from the side its normal points to.

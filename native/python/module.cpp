@@ -1,6 +1,8 @@
 // lfprobe._native: a thin binding over the native core. numpy arrays in and out, long work
 // run as Jobs with the GIL released, native errors turned into Python exceptions. No
 // algorithm lives here.
+#include <array>
+#include <charconv>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -180,6 +182,14 @@ py::dict probe_dict(ProbeMap&& map) {
     return d;
 }
 
+// A float setting as the decimal it was written as (0.8f as 0.8, not 0.800000011920929): the
+// shortest decimal that reads back as the same float.
+double as_written(float value) {
+    std::array<char, 32> text{};
+    const auto end = std::to_chars(text.data(), text.data() + text.size(), value).ptr;
+    return std::stod(std::string(text.data(), end));
+}
+
 // The defaults of the core's settings, the one place the CLI, the add-on's properties and the
 // report read them from.
 py::dict defaults_dict() {
@@ -196,7 +206,7 @@ py::dict defaults_dict() {
     trace["tile_size"] = render.tile_size;
     py::dict baking;
     baking["resolution"] = bake.resolution;
-    baking["splat_scale"] = bake.splat_scale;
+    baking["splat_scale"] = as_written(bake.splat_scale);
     baking["hole_fill_texels"] = bake.hole_fill_texels;
     baking["max_splat_radius_texels"] = bake.max_splat_radius_texels;
     baking["normal_neighbours"] = LocalGeometryOptions{}.normal_neighbours;

@@ -229,3 +229,16 @@ def test_engine_settings_choose_the_grid():
     assert probe_view.trace_settings(scene)["filter"] == "nearest" and probe_view.trace_settings(scene)["blend"] == 1
     assert probe_view.pixel_samples(scene) == 9
     bpy.ops.render.render()  # nearest-first tracing renders too
+
+
+def test_settings_default_to_the_native_cores_defaults():
+    # Blender needs a property's default when the class is made, before the native module
+    # is loaded, so the add-on writes them; they must be the core's own.
+    defaults = helpers.addon("core.native").load().DEFAULTS
+    render = bpy.context.scene.lfprobe_render.bl_rna.properties
+    assert math.isclose(render["thickness"].default, defaults["trace"]["thickness"], rel_tol=1e-6)
+    assert render["mode"].default == defaults["trace"]["mode"]
+    assert render["radiance_filter"].default == defaults["trace"]["filter"]
+    assert render["blend"].default == defaults["trace"]["blend"]
+    grid = helpers.addon("blender.properties").LFProbeGridProperties.bl_rna.properties
+    assert grid["resolution"].default == defaults["bake"]["resolution"]

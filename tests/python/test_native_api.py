@@ -154,3 +154,19 @@ def test_plan_options_reach_the_splat_settings_of_the_planned_bake(native, tmp_p
     splat_keys = {"splat_scale", "splat_plane_reach", "max_splat_radius_texels", "hole_fill_texels",
                   "min_distance"}
     assert splat_keys <= set(planned) and splat_keys <= set(plain)
+
+
+def test_grid_positions_are_the_bakes_with_a_one_probe_axis_at_the_centre(native):
+    from lfprobe.core import defaults
+    from lfprobe.core.report.scene import grid_positions
+
+    positions = native.grid_positions([0.0, 0.0, 1.0], [2.0, 4.0, 3.0], [3, 1, 2])
+    assert positions.shape == (6, 3)
+    # x fastest, then z (y has one probe: at the box's centre, where the bake puts it)
+    assert positions[:, 0].tolist() == [0.0, 1.0, 2.0, 0.0, 1.0, 2.0]
+    assert set(positions[:, 1].tolist()) == {2.0}
+    assert positions[:, 2].tolist() == [1.0, 1.0, 1.0, 3.0, 3.0, 3.0]
+    assert grid_positions([0.0, 0.0, 1.0], [2.0, 4.0, 3.0], [3, 1, 2]) == positions.tolist()
+    # The defaults every caller reads are the native settings' own.
+    assert defaults.trace("thickness") == 0.02 and defaults.bake("splat_scale") == 0.8
+    assert defaults.bake("resolution") == 512 and defaults.trace("blend") == 4

@@ -1,4 +1,4 @@
-"""Blender cameras → the camera JSON of DESIGN.md §3 that the native renderer reads.
+"""Blender cameras → the camera JSON of docs/DESIGN.md §3 that the native renderer reads.
 
 Two sources: a camera object with the scene's render settings (F12, the batch CLI, compare),
 and the 3D viewport's view (the engine's viewport render). Positions become *world*

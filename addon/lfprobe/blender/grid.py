@@ -10,6 +10,7 @@ import numpy as np
 from bpy.props import FloatProperty, IntProperty
 from mathutils import Vector
 
+from ..core import native
 from ..core.errors import InputError
 
 
@@ -45,15 +46,11 @@ def grid_box(obj) -> tuple:
 
 
 def probe_positions(obj) -> np.ndarray:
-    """The probes of the grid in Blender's frame, x fastest then y then z (the bake's order)."""
+    """The probes of the grid in Blender's frame, x fastest then y then z, where the bake puts
+    them (the native core's computation)."""
     low, high = grid_box(obj)
-    counts = tuple(obj.lfprobe_grid.counts)
-    axes = [
-        np.linspace(low[a], high[a], counts[a]) if counts[a] > 1 else np.array([(low[a] + high[a]) / 2])
-        for a in range(3)
-    ]
-    z, y, x = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
-    return np.column_stack([x.ravel(), y.ravel(), z.ravel()])
+    counts = [int(c) for c in obj.lfprobe_grid.counts]
+    return native.load().grid_positions([float(v) for v in low], [float(v) for v in high], counts)
 
 
 def default_probe_dir(obj) -> str:

@@ -2,7 +2,7 @@
 
 Each object is evaluated (modifiers applied), triangulated through its loop triangles and
 placed by its world matrix in double precision. What a triangle's base colour is follows the
-object's material as Blender shades it, reduced to what the native mesh holds (DESIGN.md §4:
+object's material as Blender shades it, reduced to what the native mesh holds (docs/DESIGN.md §4:
 unlit base colour): the Principled BSDF's "Base Color" value, an Image Texture feeding it
 (sampled with the active UV map), or a colour attribute feeding it; objects without a
 material show their active colour attribute, else Blender's default grey.

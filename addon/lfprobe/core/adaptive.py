@@ -19,7 +19,7 @@ from typing import Callable, Dict, List, Optional, Sequence
 
 import numpy as np
 
-from . import native
+from . import defaults, native
 from .atomic_write import atomic_open
 from .pipeline import BakeOptions, Progress, ProbePlacementSpec, bake_from_cloud
 from .probe_set import MANIFEST, coarse_level_bytes, read_manifest
@@ -28,7 +28,7 @@ UNKNOWN = 2  # the render's status channel: 0 MISS, 1 HIT, 2 UNKNOWN
 # Why the greedy loop stopped: every view at the target, the next probe over the budget, the
 # limit of added probes reached, every view above the target already with a probe at its eye.
 STOP_REASONS = ("target", "budget", "max_added", "eyes_used")
-DEFAULT_TRACE = {"mode": "auto", "thickness": 0.02}
+DEFAULT_TRACE = {"mode": defaults.trace("mode"), "thickness": defaults.trace("thickness")}
 Log = Optional[Callable[[str], object]]
 
 
@@ -144,7 +144,7 @@ def place_adaptively(
     distance_step: float = 0.0,
 ) -> AdaptiveResult:
     """Greedy placement into `folder` (a probe set that ends up holding the base and the added
-    probes). cameras: camera dicts (DESIGN.md §3, world coordinates). base_grid: {"min", "max",
+    probes). cameras: camera dicts (docs/DESIGN.md §3, world coordinates). base_grid: {"min", "max",
     "counts"}, or base_positions (world), or neither. resolution: the new probes' N, or with
     `plan` (options of start_bake_planned_probe_set) each new probe is planned from the data.
     Stops when every view's UNKNOWN rate is ≤ target_unknown, when the next probe would take the

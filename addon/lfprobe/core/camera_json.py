@@ -1,4 +1,4 @@
-"""Camera files (DESIGN.md §3) without Blender: the JSON the add-on writes from a Blender
+"""Camera files (docs/DESIGN.md §3) without Blender: the JSON the add-on writes from a Blender
 camera, built here from a position and a target for scripts, tests and benchmarks."""
 
 from __future__ import annotations

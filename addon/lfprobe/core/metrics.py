@@ -1,4 +1,4 @@
-"""Image metrics for comparing a rendered view with ground truth (DESIGN.md §4 "Metrics").
+"""Image metrics for comparing a rendered view with ground truth (docs/DESIGN.md §6).
 
 Pure numpy (no bpy, no scipy). Every figure is defined in the docstring of the function that
 computes it, and `DEFINITIONS` repeats the definitions that `compare --json` prints.

@@ -6,7 +6,7 @@ import json
 from dataclasses import dataclass, field
 from typing import Callable, Optional, Sequence
 
-from . import native
+from . import defaults, native
 from .probe_set import read_manifest
 from .sources import default_cache_dir, describe_mesh, describe_scan
 
@@ -47,10 +47,11 @@ class ProbePlacementSpec:
 
 @dataclass
 class BakeOptions:
-    resolution: int = 512
-    splat_scale: float = 0.8
-    hole_fill_texels: int = 4
-    normal_neighbours: int = 12
+    # The native bake's defaults (core/defaults.py).
+    resolution: int = field(default_factory=lambda: defaults.bake("resolution"))
+    splat_scale: float = field(default_factory=lambda: defaults.bake("splat_scale"))
+    hole_fill_texels: int = field(default_factory=lambda: defaults.bake("hole_fill_texels"))
+    normal_neighbours: int = field(default_factory=lambda: defaults.bake("normal_neighbours"))
     extra: dict = field(default_factory=dict)
     # None: every probe at `resolution`. A dict: plan first (bake --auto): per-probe resolution
     # from the data, classification, moves and drops, with these options of

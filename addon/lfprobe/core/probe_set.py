@@ -1,4 +1,4 @@
-"""Reading a probe set folder (DESIGN.md §3) without the native module: the manifest and the
+"""Reading a probe set folder (docs/DESIGN.md §3) without the native module: the manifest and the
 facts `lfprobe info` prints."""
 
 from __future__ import annotations

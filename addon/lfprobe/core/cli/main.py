@@ -13,7 +13,7 @@ import json
 import sys
 from typing import Optional, Sequence
 
-from .. import native
+from .. import defaults, native
 from . import compare as compare_cli, mesh as mesh_cli, place as place_cli, report as report_cli, storage as storage_cli
 from ..pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh, bake_from_scans
 from ..probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
@@ -241,14 +241,14 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--grid-min", nargs=3, type=float, metavar=("X", "Y", "Z"))
     bake.add_argument("--grid-max", nargs=3, type=float, metavar=("X", "Y", "Z"))
     bake.add_argument("--counts", nargs=3, type=int, metavar=("NX", "NY", "NZ"))
-    bake.add_argument("--res", type=int, default=512, help="octahedral map resolution N (N×N texels)")
+    bake.add_argument("--res", type=int, default=defaults.bake("resolution"), help="octahedral map resolution N (N×N texels)")
     bake.add_argument("--out", required=True, metavar="DIR", help="probe set folder to write")
     bake.add_argument("--columns", help='text scans: column names, e.g. "x y z i r g b"')
     bake.add_argument("--cache", default=None, metavar="DIR", help="parsed-scan cache folder")
     bake.add_argument("--no-cache", action="store_true", help="parse the scans without the cache")
-    bake.add_argument("--splat-scale", type=float, default=0.8, help="splat radius / point spacing")
-    bake.add_argument("--hole-fill", type=int, default=4, help="largest hole (texels) to fill")
-    bake.add_argument("--normal-k", type=int, default=12, help="neighbours for PCA normals")
+    bake.add_argument("--splat-scale", type=float, default=defaults.bake("splat_scale"), help="splat radius / point spacing")
+    bake.add_argument("--hole-fill", type=int, default=defaults.bake("hole_fill_texels"), help="largest hole (texels) to fill")
+    bake.add_argument("--normal-k", type=int, default=defaults.bake("normal_neighbours"), help="neighbours for PCA normals")
     bake.add_argument("--json", action="store_true", help="print the summary as JSON")
     bake.add_argument("--quiet", action="store_true", help="no progress output")
     bake.add_argument("--auto", action="store_true",
@@ -272,12 +272,12 @@ def build_parser() -> argparse.ArgumentParser:
 
     render = sub.add_parser("render", help="render a view by tracing a probe set")
     render.add_argument("--probes", required=True, metavar="DIR", help="probe set folder")
-    render.add_argument("--camera", required=True, metavar="CAM.json", help="camera file (DESIGN.md §3)")
+    render.add_argument("--camera", required=True, metavar="CAM.json", help="camera file (docs/DESIGN.md §3)")
     render.add_argument("--out", required=True, metavar="IMG.exr")
     render.add_argument("--mode", choices=["auto", "nearest", "grid"], default="auto",
                         help="auto: grid walk for grid sets, else nearest probes first")
     render.add_argument("--threads", type=int, default=0, help="cores to use (0: all); same image")
-    render.add_argument("--thickness", type=float, default=0.02, help="surface thickness (m)")
+    render.add_argument("--thickness", type=float, default=defaults.trace("thickness"), help="surface thickness (m)")
     add_fidelity_arguments(render)
     render.add_argument("--json", action="store_true", help="print the stats as JSON")
     render.add_argument("--quiet", action="store_true")

@@ -16,7 +16,7 @@ from .arguments import add_plan_arguments, add_storage_arguments, bake_storage, 
 
 
 def read_view_cameras(paths) -> list:
-    """Camera JSON files (DESIGN.md §3) as dicts, with messages that name the file."""
+    """Camera JSON files (docs/DESIGN.md §3) as dicts, with messages that name the file."""
     cameras = []
     for path in paths:
         if not os.path.isfile(path):

@@ -6,20 +6,24 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Dict, List, Optional, Tuple
 
+from .. import defaults
+
+# The renderer's own defaults: the report's default setting is the one users get.
+_MODE = defaults.trace("mode")
+_THICKNESS = defaults.trace("thickness")
 # Trace settings: (label, render keyword arguments). The first is the default setting.
-DEFAULT_TRACE = ("default (auto, 2 cm, coarse levels)", {"mode": "auto", "thickness": 0.02, "use_coarse_levels": True})
+DEFAULT_TRACE = (f"default ({_MODE}, {_THICKNESS * 100:g} cm, coarse levels)",
+                 {"mode": _MODE, "thickness": _THICKNESS, "use_coarse_levels": True})
 TRACE_VARIANTS = [
     DEFAULT_TRACE,
-    ("no coarse levels", {"mode": "auto", "thickness": 0.02, "use_coarse_levels": False}),
+    ("no coarse levels", {**DEFAULT_TRACE[1], "use_coarse_levels": False}),
     # Coarse resolution: the coarsest min-distance level kept (ProbeField.load(coarse_resolution)).
-    ("coarse levels down to 32²", {"mode": "auto", "thickness": 0.02, "use_coarse_levels": True,
-                                   "coarse_resolution": 32}),
-    ("nearest-first (no grid walk)", {"mode": "nearest", "thickness": 0.02, "use_coarse_levels": True}),
-    ("thickness 1 cm", {"mode": "auto", "thickness": 0.01, "use_coarse_levels": True}),
-    ("thickness 5 cm", {"mode": "auto", "thickness": 0.05, "use_coarse_levels": True}),
+    ("coarse levels down to 32²", {**DEFAULT_TRACE[1], "coarse_resolution": 32}),
+    ("nearest-first (no grid walk)", {**DEFAULT_TRACE[1], "mode": "nearest"}),
+    ("thickness 1 cm", {**DEFAULT_TRACE[1], "thickness": 0.01}),
+    ("thickness 5 cm", {**DEFAULT_TRACE[1], "thickness": 0.05}),
     # The paper's colour: the first probe that answers, its one texel (no filter, no blending).
-    ("first hit, nearest texel (the paper)", {"mode": "auto", "thickness": 0.02, "use_coarse_levels": True,
-                                              "filter": "nearest", "blend": 1}),
+    ("first hit, nearest texel (the paper)", {**DEFAULT_TRACE[1], "filter": "nearest", "blend": 1}),
 ]
 
 # The default trace on probes held in compact storage (ProbeField.load(storage="compact"):
@@ -32,7 +36,8 @@ LOAD_KEYS = ("coarse_resolution", "storage")
 # Bake settings compared in the resolution sweep: the project's splatted, hole-filled bake and
 # the paper's one-point-one-texel bake (no footprint, no hole filling).
 BAKE_VARIANTS = {
-    "splat + fill": {"splat_scale": 0.8, "hole_fill_texels": 4},
+    "splat + fill": {"splat_scale": defaults.bake("splat_scale"),
+                     "hole_fill_texels": defaults.bake("hole_fill_texels")},
     "points only": {"splat_scale": 0.0, "hole_fill_texels": 0},
 }
 

@@ -13,6 +13,7 @@ import os
 from dataclasses import dataclass, field
 from typing import List, Optional, Sequence
 
+from .. import native
 from ..camera_json import camera_dict
 
 DEFAULT_SCAN = {"step_deg": 0.25, "noise_mm": 1.0, "vertical_fov": 300.0}
@@ -20,11 +21,9 @@ NAME_CHARACTERS = set("abcdefghijklmnopqrstuvwxyzABCDEFGHIJKLMNOPQRSTUVWXYZ01234
 
 
 def grid_positions(grid_min: Sequence[float], grid_max: Sequence[float], counts: Sequence[int]) -> List[List[float]]:
-    """Probe positions of a grid, x fastest (the corner probes on the box corners)."""
-    axes = []
-    for lo, hi, n in zip(grid_min, grid_max, counts):
-        axes.append([lo + (hi - lo) * i / (n - 1) if n > 1 else lo for i in range(n)])
-    return [[x, y, z] for z in axes[2] for y in axes[1] for x in axes[0]]
+    """Probe positions of a grid as the bake places them, x fastest (the corner probes on the box
+    corners, an axis with one probe at the box's centre): the native core's computation."""
+    return native.load().grid_positions(list(grid_min), list(grid_max), [int(c) for c in counts]).tolist()
 
 
 @dataclass
@@ -36,7 +35,7 @@ class View:
     resolution: List[int] = field(default_factory=lambda: [320, 240])
 
     def camera(self, max_width: Optional[int] = None, position: Optional[Sequence[float]] = None) -> dict:
-        """The camera JSON dict (DESIGN.md §3) of this view; max_width scales the resolution
+        """The camera JSON dict (docs/DESIGN.md §3) of this view; max_width scales the resolution
         down keeping its aspect; position moves the eye keeping the viewing direction."""
         w, h = self.resolution
         if max_width is not None and w > max_width:

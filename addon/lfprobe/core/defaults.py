@@ -1,0 +1,19 @@
+"""The defaults of the native core's settings, as the native module states them
+(``_native.DEFAULTS``): the command line, the report and the add-on take them from here instead
+of writing their own copies. ``trace(name)``: mode, thickness, use_coarse_levels, max_probes,
+filter, blend, spp, tile_size; ``bake(name)``: resolution, splat_scale, hole_fill_texels,
+max_splat_radius_texels, normal_neighbours, supersample."""
+
+from __future__ import annotations
+
+from . import native
+
+
+def trace(name: str):
+    """A trace or render setting's default."""
+    return native.load().DEFAULTS["trace"][name]
+
+
+def bake(name: str):
+    """A bake setting's default."""
+    return native.load().DEFAULTS["bake"][name]
