@@ -2,17 +2,16 @@
 
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cmath>
 #include <limits>
 
 #include <tbb/blocked_range.h>
-#include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/image_exr.hpp"
 #include "lfprobe/image_metadata.hpp"
+#include "lfprobe/image_tiles.hpp"
 #include "lfprobe/probe_trace.hpp"
 
 namespace lfprobe {
@@ -38,17 +37,11 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
         progress->begin_stage("ground truth", image.pixel_count());
     }
     const glm::dvec3 offset = scene.mesh().world_offset;
-    const auto tile = static_cast<std::size_t>(settings.tile_size);
     const float inv_samples = 1.0f / static_cast<float>(n * n);
     std::atomic<std::uint64_t> rays{0};
     const CameraRays camera_rays(camera);
-    const auto start = std::chrono::steady_clock::now();
-    tbb::parallel_for(
-        tbb::blocked_range2d<int>(0, camera.height, tile, 0, camera.width, tile),
-        [&](const tbb::blocked_range2d<int>& r) {
-            if (progress != nullptr) {
-                progress->throw_if_cancelled();
-            }
+    const double seconds = for_each_image_tile(
+        camera.width, camera.height, settings.tile_size, progress, [&](const ImageTile& r) {
             std::uint64_t tile_rays = 0;
             for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
                 for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
@@ -98,13 +91,7 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
                 }
             }
             rays.fetch_add(tile_rays, std::memory_order_relaxed);
-            if (progress != nullptr) {
-                progress->advance(r.rows().size() * r.cols().size());
-            }
-        },
-        tbb::simple_partitioner());
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        });
     if (stats != nullptr) {
         *stats = GroundTruthStats{};
         stats->rays = rays.load();

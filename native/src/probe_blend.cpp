@@ -119,7 +119,7 @@ double sampling_weight(const glm::dvec3& position, int resolution, const glm::dv
 glm::vec3 blend_probes(const ProbeField& field, const glm::dvec3& point, const glm::dvec3& normal,
                        const glm::dvec3& view, const std::size_t* probes, std::size_t count,
                        std::size_t answered, const glm::vec3& answered_radiance,
-                       const FieldTraceSettings& settings) {
+                       const FieldTraceSettings& settings, double eye_distance) {
     if (count > kMaxBlend) {
         throw InputError("probe blend: at most 8 probes, got " + std::to_string(count));
     }
@@ -162,7 +162,10 @@ glm::vec3 blend_probes(const ProbeField& field, const glm::dvec3& point, const g
             continue; // the back of a surface, or another surface
         }
         seen[seen_count++] = {
-            map.position, filtered_radiance(map, direction, texel, tolerance, settings.filter), w};
+            map.position,
+            filtered_radiance(map, direction, texel, tolerance, settings.filter,
+                              footprint_of(field, probes[k], r, eye_distance, settings)),
+            w};
     }
     // An insertion sort: std::sort on a small std::array trips GCC 12's -Warray-bounds.
     for (std::size_t k = 1; k < seen_count; ++k) {
@@ -184,6 +187,16 @@ glm::vec3 blend_probes(const ProbeField& field, const glm::dvec3& point, const g
     return glm::vec3(base + sum / weight);
 }
 
+RadianceFootprint footprint_of(const ProbeField& field, std::size_t probe, double probe_distance,
+                               double eye_distance, const FieldTraceSettings& settings) {
+    if (settings.filter != RadianceFilter::Footprint) {
+        return {};
+    }
+    return {&field.radiance_mips(probe),
+            footprint_in_texels(eye_distance, settings.sample_angle, probe_distance,
+                                field.probe(probe).resolution)};
+}
+
 void shade_hit(const ProbeField& field, const Ray& ray, FieldTraceResult& hit,
                const FieldTraceSettings& settings) {
     if (hit.status != TraceStatus::Hit || hit.probe < 0) {
@@ -196,9 +209,11 @@ void shade_hit(const ProbeField& field, const Ray& ray, FieldTraceResult& hit,
     const ProbeMap& map = field.probe(answered);
     const glm::dvec3 point = ray.at(hit.t);
     const glm::dvec3 direction = point - map.position;
+    const double r = glm::length(direction);
+    const double eye_distance = glm::length(point - ray.origin);
     const glm::vec3 own = filtered_radiance(
-        map, direction, hit.texel,
-        surface_thickness(settings.probe, glm::length(direction), map.resolution), settings.filter);
+        map, direction, hit.texel, surface_thickness(settings.probe, r, map.resolution),
+        settings.filter, footprint_of(field, answered, r, eye_distance, settings));
     if (settings.blend <= 1 || field.probe_count() < 2) {
         hit.radiance = own;
         return;
@@ -208,7 +223,7 @@ void shade_hit(const ProbeField& field, const Ray& ray, FieldTraceResult& hit,
         std::min<std::size_t>(kMaxBlend, static_cast<std::size_t>(settings.blend));
     const std::size_t count = candidates_around(field, point, answered, wanted, probes);
     hit.radiance = blend_probes(field, point, glm::dvec3(hit.normal), ray.direction, probes.data(),
-                                count, answered, own, settings);
+                                count, answered, own, settings, eye_distance);
 }
 
 } // namespace lfprobe

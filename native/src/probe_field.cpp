@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <mutex>
 #include <utility>
 
 #include <glm/geometric.hpp>
@@ -159,6 +160,23 @@ const char* field_mode_name(FieldMode mode) {
     return "auto";
 }
 
+struct ProbeField::RadianceMipCache {
+    std::once_flag built;
+    std::vector<RadianceMips> mips;
+};
+
+ProbeField::ProbeField() : radiance_mips_(std::make_shared<RadianceMipCache>()) {}
+
+const RadianceMips& ProbeField::radiance_mips(std::size_t i) const {
+    RadianceMipCache& cache = *radiance_mips_;
+    std::call_once(cache.built, [&] {
+        cache.mips.resize(probes_.size());
+        tbb::parallel_for(std::size_t{0}, probes_.size(),
+                          [&](std::size_t k) { cache.mips[k] = RadianceMips(probes_[k]); });
+    });
+    return cache.mips.at(i);
+}
+
 ProbeField ProbeField::load(const std::string& folder, Progress* progress, int coarse_resolution,
                             const std::optional<ProbeStorage>& storage) {
     if (coarse_resolution < 0) {
@@ -204,7 +222,7 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
 
 ProbeField::ProbeField(const ProbePlacement& placement, std::vector<ProbeMap> probes,
                        const glm::dvec3& world_offset)
-    : probes_(std::move(probes)) {
+    : probes_(std::move(probes)), radiance_mips_(std::make_shared<RadianceMipCache>()) {
     manifest_.world_offset = world_offset;
     manifest_.placement = placement;
     if (probes_.empty()) {

@@ -1,5 +1,6 @@
 #include "lfprobe/radiance_filter.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -16,21 +17,73 @@ RadianceFilter radiance_filter_from_name(const std::string& name) {
     if (name == "bilinear") {
         return RadianceFilter::Bilinear;
     }
-    throw InputError("radiance filter must be \"nearest\" or \"bilinear\", got \"" + name + "\"");
+    if (name == "footprint") {
+        return RadianceFilter::Footprint;
+    }
+    throw InputError("radiance filter must be \"nearest\", \"bilinear\" or \"footprint\", got \"" +
+                     name + "\"");
 }
 
 const char* radiance_filter_name(RadianceFilter filter) {
-    return filter == RadianceFilter::Bilinear ? "bilinear" : "nearest";
+    switch (filter) {
+    case RadianceFilter::Bilinear:
+        return "bilinear";
+    case RadianceFilter::Footprint:
+        return "footprint";
+    case RadianceFilter::Nearest:
+        break;
+    }
+    return "nearest";
 }
 
+double footprint_in_texels(double eye_distance, double sample_angle, double probe_distance, int n) {
+    const double texel_width = probe_distance * oct::kTexelAngleTimesN / static_cast<double>(n);
+    return texel_width > 0.0 ? eye_distance * sample_angle / texel_width : 0.0;
+}
+
+namespace {
+
+glm::vec3 same_surface_bilinear(const ProbeMap& map, const glm::dvec3& direction, oct::Texel texel,
+                                double tolerance);
+
+} // namespace
+
 glm::vec3 filtered_radiance(const ProbeMap& map, const glm::dvec3& direction, oct::Texel texel,
-                            double tolerance, RadianceFilter filter) {
+                            double tolerance, RadianceFilter filter,
+                            const RadianceFootprint& footprint) {
+    if (filter == RadianceFilter::Nearest || map.resolution < 2) {
+        return map.radiance_at(oct::texel_index(texel, map.resolution));
+    }
+    const glm::vec3 fine = same_surface_bilinear(map, direction, texel, tolerance);
+    if (filter != RadianceFilter::Footprint || footprint.mips == nullptr ||
+        !(footprint.texels > 1.0)) {
+        return fine;
+    }
+    // The level whose texels are as wide as the sample, between the two nearest levels.
+    const double level =
+        std::min(std::log2(footprint.texels), static_cast<double>(footprint.mips->level_count()));
+    const int below = static_cast<int>(level);
+    const auto blend = static_cast<float>(level - below);
+    const glm::vec2 uv = oct::encode(glm::vec3(direction));
+    bool found = false;
+    const glm::vec3 lower = below == 0 ? fine : footprint.mips->bilinear(below, uv, found);
+    if (below > 0 && !found) {
+        return fine;
+    }
+    if (below == footprint.mips->level_count() || blend == 0.0f) {
+        return lower;
+    }
+    const glm::vec3 upper = footprint.mips->bilinear(below + 1, uv, found);
+    return found ? lower + blend * (upper - lower) : lower;
+}
+
+namespace {
+
+glm::vec3 same_surface_bilinear(const ProbeMap& map, const glm::dvec3& direction, oct::Texel texel,
+                                double tolerance) {
     const int n = map.resolution;
     const std::size_t met = oct::texel_index(texel, n);
     const glm::vec3 base = map.radiance_at(met);
-    if (filter == RadianceFilter::Nearest || n < 2) {
-        return base;
-    }
     const double r_met = static_cast<double>(map.distance_at(met));
     if (!std::isfinite(r_met)) {
         return base;
@@ -80,5 +133,7 @@ glm::vec3 filtered_radiance(const ProbeMap& map, const glm::dvec3& direction, oc
     }
     return base + sum / weight;
 }
+
+} // namespace
 
 } // namespace lfprobe

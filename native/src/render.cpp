@@ -2,18 +2,16 @@
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <optional>
 #include <vector>
 
-#include <tbb/blocked_range2d.h>
 #include <tbb/parallel_for.h>
-#include <tbb/partitioner.h>
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/image_exr.hpp"
 #include "lfprobe/image_metadata.hpp"
+#include "lfprobe/image_tiles.hpp"
 #include "lfprobe/probe_lookup.hpp"
 #include "lfprobe/radiance_filter.hpp"
 
@@ -126,11 +124,18 @@ public:
                 if (trace_.filter != RadianceFilter::Nearest &&
                     answers[k].status == TraceStatus::Hit) {
                     // The eye probe alone: from its centre no other probe adds detail.
-                    const ProbeMap& map = field_.probe(static_cast<std::size_t>(eye_.index));
+                    const auto probe = static_cast<std::size_t>(eye_.index);
+                    const ProbeMap& map = field_.probe(probe);
+                    RadianceFootprint footprint;
+                    if (trace_.filter == RadianceFilter::Footprint) {
+                        footprint = {&field_.radiance_mips(probe),
+                                     footprint_in_texels(answers[k].t, trace_.sample_angle,
+                                                         answers[k].t, map.resolution)};
+                    }
                     hits[k].radiance = filtered_radiance(
                         map, rays[k].direction, answers[k].texel,
                         surface_thickness(trace_.probe, answers[k].t, map.resolution),
-                        trace_.filter);
+                        trace_.filter, footprint);
                 }
             }
         }
@@ -254,6 +259,20 @@ struct SampleMean {
     }
 };
 
+// The footprint filter's width: the angle one of the n × n samples of a pixel spans at the image
+// centre, unless the settings give one.
+RenderSettings with_sample_angle(const RenderSettings& settings, const Camera& camera, int n) {
+    RenderSettings s = settings;
+    if (s.trace.filter == RadianceFilter::Footprint && s.trace.sample_angle <= 0.0) {
+        const double pixel_angle =
+            camera.type == CameraType::Perspective
+                ? 1.0 / camera.pixels_per_tangent()
+                : (camera.longitude_max - camera.longitude_min) / static_cast<double>(camera.width);
+        s.trace.sample_angle = pixel_angle / static_cast<double>(n);
+    }
+    return s;
+}
+
 } // namespace
 
 RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
@@ -265,27 +284,21 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
     const int n = samples_per_axis(settings.samples_per_pixel, "render");
     // An eye at a probe (docs/DESIGN.md §4): every ray is one texel lookup in that probe; only rays
     // it cannot answer (UNKNOWN texels) go through the whole field.
-    const ViewTracer tracer(field, camera, settings);
+    const ViewTracer tracer(field, camera, with_sample_angle(settings, camera, n));
     RenderedImage image(camera.width, camera.height);
     // Probe traces per pixel, summed after the parallel loop (no shared counters).
     std::vector<std::uint32_t> probes_tried(image.pixel_count(), 0);
     if (progress != nullptr) {
         progress->begin_stage("tracing", image.pixel_count());
     }
-    const auto start = std::chrono::steady_clock::now();
     const glm::dvec3 offset = field.world_offset();
-    const std::size_t tile = static_cast<std::size_t>(settings.tile_size);
     const CameraRays camera_rays(camera);
     // With an odd n the middle stratum is the pixel centre: its ray is the centre's.
     const int middle = n % 2 == 1 ? n / 2 : -1;
     const bool centre_is_sample =
         middle >= 0 && settings.sample_x == 0.5 && settings.sample_y == 0.5;
-    tbb::parallel_for(
-        tbb::blocked_range2d<int>(0, camera.height, tile, 0, camera.width, tile),
-        [&](const tbb::blocked_range2d<int>& r) {
-            if (progress != nullptr) {
-                progress->throw_if_cancelled();
-            }
+    const double seconds = for_each_image_tile(
+        camera.width, camera.height, settings.tile_size, progress, [&](const ImageTile& r) {
             std::array<Ray, kRayBatch> rays;
             std::array<FieldTraceResult, kRayBatch> hits;
             std::vector<Ray> sample_rays;
@@ -359,13 +372,7 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
                     x0 += count;
                 }
             }
-            if (progress != nullptr) {
-                progress->advance(r.rows().size() * r.cols().size());
-            }
-        },
-        tbb::simple_partitioner());
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        });
     if (stats != nullptr) {
         *stats = stats_of(image);
         stats->seconds = seconds;

@@ -81,7 +81,7 @@ TEST(Fidelity, OneColourSurfaceReadsExactlyThatColourWithAnyFiltering) {
     for (const Camera& camera : {between, at_probe}) {
         for (const int spp : {1, 4, 9}) {
             for (const RadianceFilter filter :
-                 {RadianceFilter::Nearest, RadianceFilter::Bilinear}) {
+                 {RadianceFilter::Nearest, RadianceFilter::Bilinear, RadianceFilter::Footprint}) {
                 for (const int blend : {1, 4, 8}) {
                     const RenderedImage image =
                         render_probe_view(field, camera, fidelity(spp, filter, blend));
@@ -196,6 +196,49 @@ TEST(Fidelity, BlendingIsOrderIndependentAndBitIdenticalForOneAndTwoThreads) {
     EXPECT_EQ(a.rgba, b.rgba);
     EXPECT_EQ(a.depth, b.depth);
     EXPECT_EQ(a.status, b.status);
+}
+
+// A wall x = 3 painted in stripes 8 cm wide along y: finer than the pixels of a small view, so
+// one sample per pixel aliases unless the lookup averages what the pixel covers.
+ProbeMap striped_wall_probe(int n) {
+    return testing::custom_probe(
+        n, glm::dvec3(0.0), [](const glm::vec3& d, std::size_t i, ProbeMap& map) {
+            if (d.x <= 0.0f) {
+                map.set_empty(i);
+                return;
+            }
+            const float t = 3.0f / d.x;
+            const bool light = static_cast<int>(std::floor(t * d.y / 0.08f)) % 2 == 0;
+            map.set_surface(i, t, light ? glm::vec3(0.9f) : glm::vec3(0.1f), {-1.0f, 0.0f, 0.0f},
+                            1.0f);
+        });
+}
+
+TEST(Fidelity, FootprintFilterAntiAliasesOneSamplePerPixel) {
+    std::vector<ProbeMap> probes;
+    probes.push_back(striped_wall_probe(512));
+    const ProbeField field(positions_placement({glm::dvec3(0.0)}), std::move(probes));
+    // The eye at the probe: every pixel one lookup, ~4 texels wide at the wall.
+    const Camera camera = Camera::look_at({0.0, 0.0, 0.0}, {1.0, 0.15, 0.05}, 48, 32, 24.0);
+    const RenderedImage reference =
+        render_probe_view(field, camera, fidelity(64, RadianceFilter::Bilinear, 1));
+    auto error = [&](const RenderedImage& image) {
+        double sum = 0.0;
+        for (std::size_t i = 0; i < image.pixel_count(); ++i) {
+            sum += std::abs(image.rgba[4 * i] - reference.rgba[4 * i]);
+        }
+        return sum / static_cast<double>(image.pixel_count());
+    };
+    const double bilinear =
+        error(render_probe_view(field, camera, fidelity(1, RadianceFilter::Bilinear, 1)));
+    const double footprint =
+        error(render_probe_view(field, camera, fidelity(1, RadianceFilter::Footprint, 1)));
+    EXPECT_GT(bilinear, 0.1);             // the stripes alias at one sample per pixel
+    EXPECT_LT(footprint, 0.5 * bilinear); // the footprint's average is near the 8×8 mean
+    // A footprint narrower than a texel (64 samples per pixel) reads as bilinear, bit for bit.
+    const RenderedImage fine =
+        render_probe_view(field, camera, fidelity(64, RadianceFilter::Footprint, 1));
+    EXPECT_EQ(fine.rgba, reference.rgba);
 }
 
 TEST(Fidelity, OneSampleNearestFirstHitIsThePapersImageBitForBit) {

@@ -28,11 +28,18 @@ void shade_hit(const ProbeField& field, const Ray& ray, FieldTraceResult& hit,
 // answered among them) that sees the local point `point` whose surface has normal `normal`,
 // seen by the eye along unit `view`.
 // `answered`/`answered_radiance`: the probe that met the point and its filtered colour, used
-// when no probe passes the test. For tests and for shade_hit.
+// when no probe passes the test. `eye_distance`: how far the point is from the eye, for the
+// footprint filter. For tests and for shade_hit.
 [[nodiscard]] glm::vec3 blend_probes(const ProbeField& field, const glm::dvec3& point,
                                      const glm::dvec3& normal, const glm::dvec3& view,
                                      const std::size_t* probes, std::size_t count,
                                      std::size_t answered, const glm::vec3& answered_radiance,
-                                     const FieldTraceSettings& settings);
+                                     const FieldTraceSettings& settings, double eye_distance = 0.0);
+
+// The footprint filter's input for probe `probe` of `field` at a point `probe_distance` from it
+// and `eye_distance` from the eye: none unless settings.filter is Footprint.
+[[nodiscard]] RadianceFootprint footprint_of(const ProbeField& field, std::size_t probe,
+                                             double probe_distance, double eye_distance,
+                                             const FieldTraceSettings& settings);
 
 } // namespace lfprobe

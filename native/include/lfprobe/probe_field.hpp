@@ -12,6 +12,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -25,6 +26,7 @@
 #include "lfprobe/probe_trace.hpp"
 #include "lfprobe/progress.hpp"
 #include "lfprobe/radiance_filter.hpp"
+#include "lfprobe/radiance_mips.hpp"
 #include "lfprobe/ray.hpp"
 
 namespace lfprobe {
@@ -48,6 +50,9 @@ struct FieldTraceSettings {
     // How many probes a HIT's colour is blended from (probe_blend.hpp), the one that answered
     // included, at most 8; 1: the answering probe alone, as the paper does.
     int blend = 4;
+    // The angle one of the eye's samples spans (radians): the footprint filter's width. 0: no
+    // footprint (the footprint filter reads as bilinear). The renderer sets it from the camera.
+    double sample_angle = 0.0;
 };
 
 struct FieldTraceResult {
@@ -92,6 +97,9 @@ public:
     [[nodiscard]] std::size_t probe_count() const { return probes_.size(); }
     [[nodiscard]] const ProbeMap& probe(std::size_t i) const { return probes_.at(i); }
     [[nodiscard]] const MinDistancePyramid& levels(std::size_t i) const { return levels_.at(i); }
+    // Probe i's prefiltered radiance (the footprint filter's); every probe's are built on the
+    // first call, from any thread, and kept: memory only sets that are rendered with it pay.
+    [[nodiscard]] const RadianceMips& radiance_mips(std::size_t i) const;
     // Maps and coarse levels of every probe.
     [[nodiscard]] std::size_t memory_bytes() const;
 
@@ -114,7 +122,7 @@ public:
                                              const TraceSettings& settings = {}) const;
 
 private:
-    ProbeField() = default;
+    ProbeField();
     void build_levels(Progress* progress);
     void check_placement() const;
 
@@ -122,6 +130,8 @@ private:
     std::string folder_;
     std::vector<ProbeMap> probes_;
     std::vector<MinDistancePyramid> levels_;
+    struct RadianceMipCache;
+    std::shared_ptr<RadianceMipCache> radiance_mips_;
 };
 
 } // namespace lfprobe

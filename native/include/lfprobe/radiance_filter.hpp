@@ -6,7 +6,10 @@
 // direction, weighted bilinearly in the map, keeping only texels whose stored surface point
 // lies on the surface of the texel met (within the trace's thickness of its plane, normals on
 // the same side): a silhouette is never smeared into the surface behind it, and a surface of
-// one colour reads exactly that colour.
+// one colour reads exactly that colour. Footprint: as bilinear while the eye's sample covers
+// at most a texel; wider, the probe's prefiltered levels (radiance_mips.hpp) at the level whose
+// texels match the sample's width where it meets the surface, interpolated between the two
+// nearest levels, as texture LOD does: one ray per pixel then averages what the pixel sees.
 #pragma once
 
 #include <string>
@@ -15,15 +18,17 @@
 
 #include "lfprobe/octahedral.hpp"
 #include "lfprobe/probe_map.hpp"
+#include "lfprobe/radiance_mips.hpp"
 
 namespace lfprobe {
 
 enum class RadianceFilter {
     Nearest,
     Bilinear,
+    Footprint,
 };
 
-// "nearest", "bilinear"; InputError for anything else.
+// "nearest", "bilinear", "footprint"; InputError for anything else.
 [[nodiscard]] RadianceFilter radiance_filter_from_name(const std::string& name);
 [[nodiscard]] const char* radiance_filter_name(RadianceFilter filter);
 
@@ -31,8 +36,20 @@ enum class RadianceFilter {
 // length > 0), met in texel `texel` (which holds a surface). `tolerance` (metres): how far a
 // neighbour's stored point may lie from the plane of the texel met and still be the same
 // surface. Nearest: texel's radiance, bit for bit.
+// The eye's sample where it meets the surface, as the footprint filter reads it.
+struct RadianceFootprint {
+    const RadianceMips* mips = nullptr; // the probe's prefiltered levels; none: bilinear
+    double texels = 0.0;                // the sample's width in the probe's level-0 texels
+};
+
+// How many of a probe's texels (map resolution n) the eye's sample spans at a surface point
+// `eye_distance` from the eye and `probe_distance` from the probe, for a sample that spans
+// `sample_angle` radians at the eye.
+[[nodiscard]] double footprint_in_texels(double eye_distance, double sample_angle,
+                                         double probe_distance, int n);
+
 [[nodiscard]] glm::vec3 filtered_radiance(const ProbeMap& map, const glm::dvec3& direction,
-                                          oct::Texel texel, double tolerance,
-                                          RadianceFilter filter);
+                                          oct::Texel texel, double tolerance, RadianceFilter filter,
+                                          const RadianceFootprint& footprint = {});
 
 } // namespace lfprobe
