@@ -57,6 +57,10 @@ def _blender_module(package, name: str):
     return importlib.import_module(f"{package.__name__}.blender.{name}")
 
 
+def _scene_objects():
+    return _blender_module(_add_on_package(), "scene_objects")
+
+
 def _scene(name: str):
     import bpy
 
@@ -73,12 +77,7 @@ def _camera(scene, name: str):
         if scene.camera is None:
             raise BatchError(f"scene '{scene.name}' has no active camera: pass --camera NAME")
         return scene.camera
-    obj = scene.objects.get(name)
-    if obj is None:
-        raise BatchError(f"no object named '{name}' in scene '{scene.name}'")
-    if obj.type != "CAMERA":
-        raise BatchError(f"object '{name}' is a {obj.type.lower()}, not a camera")
-    return obj
+    return _scene_objects().object_of_type(scene, name, "CAMERA", BatchError)
 
 
 def _depsgraph(scene):
@@ -304,12 +303,8 @@ def _cmd_compare(package, args) -> int:
     elif not args.reference:
         raise BatchError("compare needs --reference OBJ... or --reference-collection NAME")
     for name in args.reference or ():
-        obj = scene.objects.get(name)
-        if obj is None:
-            raise BatchError(f"--reference: no object named '{name}' in scene '{scene.name}'")
-        if obj.type != "MESH":
-            raise BatchError(f"--reference: object '{name}' is a {obj.type.lower()}, not a mesh")
-        references.append(obj)
+        references.append(_scene_objects().object_of_type(
+            scene, name, "MESH", lambda message: BatchError(f"--reference: {message}")))
     camera_obj = _camera(scene, args.camera)
     result = compare.run_compare(scene, _depsgraph(scene), references, os.path.abspath(args.out),
                                  camera_obj=camera_obj, grid_name=args.grid, spp=args.spp, ppd=args.ppd)

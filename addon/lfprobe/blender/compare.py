@@ -16,6 +16,7 @@ from ..core.compare import DEFAULT_PPD, CompareReport, check_samples_per_pixel
 from ..core.errors import InputError
 from . import probe_view
 from .job_modal import NativeJobOperator
+from .menu_registration import classes_with_menu_entry
 from .mesh_export import native_mesh_from_objects
 
 IMAGE_NAMES = {"ground_truth_preview": "LFP Ground Truth", "probes_preview": "LFP Probes", "error": "LFP FLIP Error"}
@@ -207,11 +208,4 @@ def _menu_item(self, _context):
     self.layout.operator(LFPROBE_OT_compare.bl_idname, icon="IMAGE_REFERENCE")
 
 
-def register():
-    bpy.utils.register_class(LFPROBE_OT_compare)
-    bpy.types.TOPBAR_MT_render.append(_menu_item)
-
-
-def unregister():
-    bpy.types.TOPBAR_MT_render.remove(_menu_item)
-    bpy.utils.unregister_class(LFPROBE_OT_compare)
+register, unregister = classes_with_menu_entry((LFPROBE_OT_compare,), "TOPBAR_MT_render", _menu_item)

@@ -12,6 +12,7 @@ from mathutils import Vector
 
 from ..core import native
 from ..core.errors import InputError
+from .menu_registration import classes_with_menu_entry
 
 
 ROTATION_TOLERANCE = 1e-6
@@ -239,14 +240,4 @@ def _menu_add(self, _context):
 _CLASSES = (LFPROBE_OT_grid_add, LFPROBE_OT_grid_fit, LFPROBE_OT_grid_source_add, LFPROBE_OT_grid_source_remove)
 
 
-_register_classes, _unregister_classes = bpy.utils.register_classes_factory(_CLASSES)
-
-
-def register():
-    _register_classes()
-    bpy.types.VIEW3D_MT_add.append(_menu_add)
-
-
-def unregister():
-    bpy.types.VIEW3D_MT_add.remove(_menu_add)
-    _unregister_classes()
+register, unregister = classes_with_menu_entry(_CLASSES, "VIEW3D_MT_add", _menu_add)

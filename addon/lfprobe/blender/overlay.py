@@ -12,12 +12,12 @@ import numpy as np
 
 from . import grid as grid_module
 from . import scan_display
+from .draw_handler import ViewportDrawHandler
 
 UNBAKED_COLOUR = (0.75, 0.75, 0.75, 1.0)
 LINE_COLOUR = (0.55, 0.75, 1.0, 0.35)
 POINT_SIZE = 8.0
 
-_handle = None
 _batch_cache: dict = {}
 
 
@@ -153,20 +153,19 @@ def _draw():
         gpu.state.blend_set("NONE")
 
 
+_draw_handler = ViewportDrawHandler(_draw)
+
+
 def is_drawing() -> bool:
-    return _handle is not None
+    return _draw_handler.active
 
 
 def register():
-    global _handle
     scan_display.register()
-    _handle = bpy.types.SpaceView3D.draw_handler_add(_draw, (), "WINDOW", "POST_VIEW")
+    _draw_handler.add()
 
 
 def unregister():
-    global _handle
-    if _handle is not None:
-        bpy.types.SpaceView3D.draw_handler_remove(_handle, "WINDOW")
-        _handle = None
+    _draw_handler.remove()
     _batch_cache.clear()
     scan_display.unregister()

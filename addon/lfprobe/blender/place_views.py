@@ -28,6 +28,7 @@ from . import camera_export
 from . import grid as grid_module
 from . import job_modal
 from . import probe_view
+from .scene_objects import object_of_type
 
 # The short words for adaptive.STOP_REASONS that the panel's one line has room for.
 STOP_WORDS = {
@@ -54,14 +55,7 @@ def view_cameras(context, grid, offset, names=()) -> list:
     frame is restored afterwards). Raises ViewsError or camera_export.CameraExportError."""
     scene = context.scene
     if names:
-        objects = []
-        for name in names:
-            obj = scene.objects.get(name)
-            if obj is None:
-                raise ViewsError(f"no object named {name!r} in scene {scene.name!r}")
-            if obj.type != "CAMERA":
-                raise ViewsError(f"object {name!r} is a {obj.type.lower()}, not a camera")
-            objects.append(obj)
+        objects = [object_of_type(scene, name, "CAMERA", ViewsError, quote=repr) for name in names]
     elif grid.views_from == "SELECTED":
         objects = sorted((obj for obj in context.selected_objects if obj.type == "CAMERA"), key=lambda o: o.name)
         if not objects:

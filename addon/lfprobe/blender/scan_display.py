@@ -10,10 +10,10 @@ import numpy as np
 
 from ..core.colour import srgb_encode
 from .properties import COLOR_ATTRIBUTE
+from .draw_handler import ViewportDrawHandler
 
 POINT_SIZE = 2.0
 
-_handle = None
 _batch_cache: dict = {}
 
 
@@ -84,14 +84,13 @@ def _draw():
         gpu.state.depth_test_set("NONE")
 
 
+_draw_handler = ViewportDrawHandler(_draw)
+
+
 def register():
-    global _handle
-    _handle = bpy.types.SpaceView3D.draw_handler_add(_draw, (), "WINDOW", "POST_VIEW")
+    _draw_handler.add()
 
 
 def unregister():
-    global _handle
-    if _handle is not None:
-        bpy.types.SpaceView3D.draw_handler_remove(_handle, "WINDOW")
-        _handle = None
+    _draw_handler.remove()
     _batch_cache.clear()

@@ -12,6 +12,7 @@ from ..core import native
 from ..core.sources import default_cache_dir
 from . import scan_object
 from .job_modal import NativeJobOperator
+from .menu_registration import classes_with_menu_entry
 
 SCAN_EXTENSIONS = (".xyz", ".pts", ".ply", ".txt", ".asc")
 # Clouds further than this from the scene's frame keep their own world offset: float32
@@ -169,11 +170,4 @@ def _menu_import(self, _context):
     self.layout.operator(LFPROBE_OT_import_scan.bl_idname, text="Scan Cloud (.xyz, .pts, .ply)")
 
 
-def register():
-    bpy.utils.register_class(LFPROBE_OT_import_scan)
-    bpy.types.TOPBAR_MT_file_import.append(_menu_import)
-
-
-def unregister():
-    bpy.types.TOPBAR_MT_file_import.remove(_menu_import)
-    bpy.utils.unregister_class(LFPROBE_OT_import_scan)
+register, unregister = classes_with_menu_entry((LFPROBE_OT_import_scan,), "TOPBAR_MT_file_import", _menu_import)

@@ -172,6 +172,13 @@ def bake_benchmark(points: int, resolution: int, tmp: str) -> dict:
     }
 
 
+def write_results(path: str, results: dict) -> None:
+    """A benchmark's figures as JSON, where --json asks for them (no file otherwise)."""
+    if path:
+        with open(path, "w", encoding="utf-8") as out:
+            json.dump(results, out, indent=2)
+
+
 def main(args) -> int:
     tmp = tempfile.mkdtemp(prefix="lfprobe-bench-")
     results = {"cpu_count": os.cpu_count()}
@@ -219,9 +226,7 @@ def main(args) -> int:
                 f"{b['memory_bytes_per_probe'] / paper:.2f}× in memory, "
                 f"{b['disk_bytes_per_probe'] / paper:.2f}× on disk"
             )
-        if args.json:
-            with open(args.json, "w", encoding="utf-8") as out:
-                json.dump(results, out, indent=2)
+        write_results(args.json, results)
         return 0
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

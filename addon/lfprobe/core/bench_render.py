@@ -15,7 +15,7 @@ import tempfile
 import time
 
 from . import native
-from .bench import room_cloud, room_surface_area, write_room_obj
+from .bench import room_cloud, room_surface_area, write_results, write_room_obj
 from .camera_json import camera_dict
 from .embree_rates import embree_rates
 
@@ -182,9 +182,7 @@ def main(args) -> int:
                   f"{row['trace_over_embree']:6.3f}  {row['trace_over_embree_packets']:6.3f}  "
                   f"floor {row['trace_from_answer_over_embree']:6.3f}  "
                   f"aim {aim:.3f}: {'met' if met else 'not met'}")
-        if args.json:
-            with open(args.json, "w", encoding="utf-8") as out:
-                json.dump(results, out, indent=2)
+        write_results(args.json, results)
         return 0
     finally:
         shutil.rmtree(tmp, ignore_errors=True)

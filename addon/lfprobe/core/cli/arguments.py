@@ -1,5 +1,6 @@
-"""Options and option parsing shared by several subcommands: X Y Z triples (bake, place), the
-planning options (place, bake --auto) and the storage options (bake, place, render, store)."""
+"""Options and option parsing shared by several subcommands: X Y Z triples and the placement
+options (bake, place), the planning options (place, bake --auto) and the storage options
+(bake, place, render, store)."""
 
 from __future__ import annotations
 
@@ -13,6 +14,17 @@ def triples(values: Optional[List[List[float]]], option: str) -> List[List[float
     if len(flat) % 3:
         raise ValueError(f"{option} takes coordinates in threes (X Y Z), got {len(flat)} numbers")
     return [flat[i : i + 3] for i in range(0, len(flat), 3)]
+
+
+def add_placement_arguments(parser: argparse.ArgumentParser) -> None:
+    """Where the scanners stood and where the probes go, shared by `bake` and `place`."""
+    parser.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X",
+                        help="scanner positions X Y Z, one per scan file (world coordinates)")
+    parser.add_argument("--probe", nargs="+", type=float, action="append", metavar="X",
+                        help="probe positions X Y Z [X Y Z ...] (world coordinates)")
+    parser.add_argument("--grid-min", nargs=3, type=float, metavar=("X", "Y", "Z"))
+    parser.add_argument("--grid-max", nargs=3, type=float, metavar=("X", "Y", "Z"))
+    parser.add_argument("--counts", nargs=3, type=int, metavar=("NX", "NY", "NZ"))
 
 
 def add_plan_arguments(parser: argparse.ArgumentParser) -> None:

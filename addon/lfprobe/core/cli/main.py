@@ -19,7 +19,7 @@ from ..pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh, bake_fro
 from ..probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
 from ..probe_storage import describe as describe_storage
 from ..progress import TerminalProgress
-from .arguments import add_plan_arguments, add_storage_arguments, bake_storage, plan_options, triples
+from .arguments import add_placement_arguments, add_plan_arguments, add_storage_arguments, bake_storage, plan_options, triples
 
 
 def _mib(n: float) -> str:
@@ -234,13 +234,7 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--supersample", type=int, default=None, metavar="N",
                       help="--mesh: n×n rays per texel for its colour, counting only those that meet "
                            "the centre ray's surface (default 4; 1: the centre ray alone)")
-    bake.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X",
-                      help="scanner positions X Y Z, one per scan file (world coordinates)")
-    bake.add_argument("--probe", nargs="+", type=float, action="append", metavar="X",
-                      help="probe positions X Y Z [X Y Z ...] (world coordinates)")
-    bake.add_argument("--grid-min", nargs=3, type=float, metavar=("X", "Y", "Z"))
-    bake.add_argument("--grid-max", nargs=3, type=float, metavar=("X", "Y", "Z"))
-    bake.add_argument("--counts", nargs=3, type=int, metavar=("NX", "NY", "NZ"))
+    add_placement_arguments(bake)
     bake.add_argument("--res", type=int, default=defaults.bake("resolution"), help="octahedral map resolution N (N×N texels)")
     bake.add_argument("--out", required=True, metavar="DIR", help="probe set folder to write")
     bake.add_argument("--columns", help='text scans: column names, e.g. "x y z i r g b"')

@@ -9,45 +9,38 @@ from .. import native
 from ..progress import TerminalProgress
 
 
-def _cmd_gt(args) -> int:
-    _native = native.load()
-    progress = None if args.quiet else TerminalProgress()
-    job = _native.start_ground_truth(
-        args.mesh, args.camera, args.out, spp=args.spp, threads=args.threads
-    )
-    stats = job.run(progress)
+def _run_job(args, start, summary) -> int:
+    """Runs the native job start(_native) with terminal progress (unless --quiet) and prints its
+    stats as JSON (--json) or as the line summary(stats) writes."""
+    job = start(native.load())
+    stats = job.run(None if args.quiet else TerminalProgress())
     if args.json:
         print(json.dumps(stats, indent=2))
         return 0
-    print(
-        f"ground truth {args.out}: {stats['pixels']} pixels, {stats['hits']} hit, "
-        f"{stats['rays']} rays in {stats['seconds']:.3f} s "
-        f"({stats['rays_per_second'] / 1e6:.2f} M rays/s)"
-    )
+    print(summary(stats))
     return 0
+
+
+def _cmd_gt(args) -> int:
+    return _run_job(
+        args,
+        lambda _native: _native.start_ground_truth(
+            args.mesh, args.camera, args.out, spp=args.spp, threads=args.threads),
+        lambda stats: (f"ground truth {args.out}: {stats['pixels']} pixels, {stats['hits']} hit, "
+                       f"{stats['rays']} rays in {stats['seconds']:.3f} s "
+                       f"({stats['rays_per_second'] / 1e6:.2f} M rays/s)"),
+    )
 
 
 def _cmd_scan(args) -> int:
-    _native = native.load()
-    progress = None if args.quiet else TerminalProgress()
-    job = _native.start_simulate_scan(
-        args.mesh,
-        args.out,
-        list(args.at),
-        step_deg=args.step_deg,
-        noise_mm=args.noise_mm,
-        vertical_fov=args.vertical_fov,
-        seed=args.seed,
+    return _run_job(
+        args,
+        lambda _native: _native.start_simulate_scan(
+            args.mesh, args.out, list(args.at), step_deg=args.step_deg, noise_mm=args.noise_mm,
+            vertical_fov=args.vertical_fov, seed=args.seed),
+        lambda stats: (f"scan {args.out}: {stats['points']} points from {stats['rays']} rays "
+                       f"in {stats['seconds']:.3f} s"),
     )
-    stats = job.run(progress)
-    if args.json:
-        print(json.dumps(stats, indent=2))
-        return 0
-    print(
-        f"scan {args.out}: {stats['points']} points from {stats['rays']} rays "
-        f"in {stats['seconds']:.3f} s"
-    )
-    return 0
 
 
 def add_parsers(subparsers) -> None:

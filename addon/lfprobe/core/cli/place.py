@@ -12,7 +12,7 @@ from collections import Counter
 from ..atomic_write import atomic_open
 from ..pipeline import ProbePlacementSpec, load_scans, plan_probes
 from ..progress import TerminalProgress
-from .arguments import add_plan_arguments, add_storage_arguments, bake_storage, plan_options, triples
+from .arguments import add_placement_arguments, add_plan_arguments, add_storage_arguments, bake_storage, plan_options, triples
 
 
 def read_view_cameras(paths) -> list:
@@ -37,6 +37,23 @@ def read_view_cameras(paths) -> list:
     return cameras
 
 
+def _load_cloud(args, progress):
+    """The --scan files merged, each placed by its --scanner, through the parsed-scan cache."""
+    return load_scans(args.scan, triples(args.scanner, "--scanner"), args.columns or "",
+                      "" if args.no_cache else args.cache, progress=progress)
+
+
+def _write_result(args, result: dict) -> bool:
+    """Writes the result to --out (if given) and prints it for --json; True when printed, so
+    that no summary follows."""
+    if args.out:
+        with atomic_open(args.out) as f:
+            json.dump(result, f, indent=2)
+    if args.json:
+        print(json.dumps(result, indent=2))
+    return bool(args.json)
+
+
 def _cmd_place_adaptive(args) -> int:
     """place --views: the base placement (if any), then probes at the eyes of the views that
     trace the most UNKNOWN pixels until --target-unknown or --budget-mib is met."""
@@ -58,8 +75,7 @@ def _cmd_place_adaptive(args) -> int:
                            counts=args.counts).validate()
         base_grid = {"min": list(args.grid_min), "max": list(args.grid_max), "counts": list(args.counts)}
     progress = None if args.quiet else TerminalProgress()
-    cloud = load_scans(args.scan, triples(args.scanner, "--scanner"), args.columns or "",
-                       "" if args.no_cache else args.cache, progress=progress)
+    cloud = _load_cloud(args, progress)
     result = place_adaptively(
         cloud, cameras, args.out_probes, base_positions=positions, base_grid=base_grid,
         resolution=args.res, plan=plan_options(args) if args.auto else None,
@@ -68,11 +84,7 @@ def _cmd_place_adaptive(args) -> int:
         storage=bake_storage(args), distance_step=args.distance_step)
     data = {"scans": [os.path.abspath(p) for p in args.scan], "points": len(cloud),
             "views": [os.path.abspath(p) for p in args.views], **result.as_dict()}
-    if args.out:
-        with atomic_open(args.out) as f:
-            json.dump(data, f, indent=2)
-    if args.json:
-        print(json.dumps(data, indent=2))
+    if _write_result(args, data):
         return 0
     first, last = result.iterations[0], result.iterations[-1]
     print(f"added {len(result.added)} probe(s) to {result.base_probes} base probe(s); stopped: "
@@ -99,16 +111,11 @@ def _cmd_place(args) -> int:
                                    counts=args.counts)
     placement.validate()
     progress = None if args.quiet else TerminalProgress()
-    cloud = load_scans(args.scan, triples(args.scanner, "--scanner"), args.columns or "",
-                       "" if args.no_cache else args.cache, progress=progress)
+    cloud = _load_cloud(args, progress)
     probes = plan_probes(cloud, placement, plan_options(args), progress)
     result = {"scans": [os.path.abspath(p) for p in args.scan], "points": len(cloud),
               "probes": probes}
-    if args.out:
-        with atomic_open(args.out) as f:
-            json.dump(result, f, indent=2)
-    if args.json:
-        print(json.dumps(result, indent=2))
+    if _write_result(args, result):
         return 0
     classes = Counter(p["class"] for p in probes)
     kept = [p for p in probes if not p["dropped"]]
@@ -139,13 +146,7 @@ def add_parsers(sub) -> None:
                     "most --target-unknown UNKNOWN or the next probe would exceed --budget-mib; the "
                     "probe set goes to --out-probes.")
     place.add_argument("--scan", nargs="+", required=True, metavar="FILE")
-    place.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X",
-                       help="scanner positions X Y Z, one per scan file (world coordinates)")
-    place.add_argument("--probe", nargs="+", type=float, action="append", metavar="X",
-                       help="probe positions X Y Z [X Y Z ...] (world coordinates)")
-    place.add_argument("--grid-min", nargs=3, type=float, metavar=("X", "Y", "Z"))
-    place.add_argument("--grid-max", nargs=3, type=float, metavar=("X", "Y", "Z"))
-    place.add_argument("--counts", nargs=3, type=int, metavar=("NX", "NY", "NZ"))
+    add_placement_arguments(place)
     place.add_argument("--columns", help='text scans: column names, e.g. "x y z i r g b"')
     place.add_argument("--cache", default=None, metavar="DIR", help="parsed-scan cache folder")
     place.add_argument("--no-cache", action="store_true")

@@ -65,18 +65,33 @@ def speed_vs_error(rows: Sequence[Dict[str, object]], cost: str, metric: str, ti
     return _png(figure)
 
 
+def _plot_series(axes, rows: Sequence[Dict[str, object]], series_key, x_field: str, y_field: str, style) -> None:
+    """One line per series (rows grouped by series_key(row), in the order first seen), its points
+    sorted by x_field, rows without a finite y_field left out; style(key) gives plot's keywords."""
+    series: Dict[str, List[Dict[str, object]]] = {}
+    for r in rows:
+        series.setdefault(series_key(r), []).append(r)
+    for key, group in series.items():
+        group = sorted(group, key=lambda r: r[x_field])
+        pts = [(r[x_field], r[y_field]) for r in group if _finite(r.get(y_field))]
+        if pts:
+            axes.plot(*zip(*pts), **style(key))
+
+
+def _resolution_axis(axes, rows: Sequence[Dict[str, object]]) -> None:
+    """A log2 x axis ticked at the rows' probe resolutions."""
+    axes.set_xscale("log", base=2)
+    resolutions = sorted({r["resolution"] for r in rows})
+    axes.set_xticks(resolutions)
+    axes.set_xticklabels([str(r) for r in resolutions])
+
+
 def error_vs_distance(rows: Sequence[Dict[str, object]], walk_rows: Sequence[Dict[str, object]], metric: str) -> bytes:
     label = METRIC_AXES[metric][0] if metric in METRIC_AXES else (
         "PSNR loss against a probe at the eye [dB], lower is better")
     figure, axes = plt.subplots(figsize=(7.5, 4.5))
-    series: Dict[str, List[Dict[str, object]]] = {}
-    for r in rows:
-        series.setdefault(f"{r['source']} probes {r['resolution']}², view {r['view']}", []).append(r)
-    for key, group in series.items():
-        group = sorted(group, key=lambda r: r["distance_to_nearest_probe"])
-        pts = [(r["distance_to_nearest_probe"], r[metric]) for r in group if _finite(r.get(metric))]
-        if pts:
-            axes.plot(*zip(*pts), marker="o", markersize=4, label=key)
+    _plot_series(axes, rows, lambda r: f"{r['source']} probes {r['resolution']}², view {r['view']}",
+                 "distance_to_nearest_probe", metric, lambda key: dict(marker="o", markersize=4, label=key))
     walk = [(r["distance_to_nearest_probe"], r[metric]) for r in walk_rows if _finite(r.get(metric))]
     if walk:
         axes.scatter(*zip(*walk), marker="x", color="black", label="walk frames (scan probes)")
@@ -91,20 +106,11 @@ def error_vs_distance(rows: Sequence[Dict[str, object]], walk_rows: Sequence[Dic
 def error_vs_resolution(rows: Sequence[Dict[str, object]], metric: str) -> bytes:
     label, _ = METRIC_AXES[metric]
     figure, axes = plt.subplots(figsize=(7.5, 4.5))
-    series: Dict[str, List[Dict[str, object]]] = {}
-    for r in rows:
-        key = "mesh (exact)" if r["source"] == "mesh" else f"scan {r['scan_step_deg']:g}° ({r['scan_points']:,} pts), {r['bake']}"
-        series.setdefault(key, []).append(r)
-    for key, group in series.items():
-        group = sorted(group, key=lambda r: r["resolution"])
-        pts = [(r["resolution"], r[metric]) for r in group if _finite(r.get(metric))]
-        if pts:
-            axes.plot(*zip(*pts), marker="o", markersize=4, label=key,
-                      linestyle="--" if "points only" in key else "-")
-    axes.set_xscale("log", base=2)
-    resolutions = sorted({r["resolution"] for r in rows})
-    axes.set_xticks(resolutions)
-    axes.set_xticklabels([str(r) for r in resolutions])
+    _plot_series(axes, rows,
+                 lambda r: "mesh (exact)" if r["source"] == "mesh" else f"scan {r['scan_step_deg']:g}° ({r['scan_points']:,} pts), {r['bake']}",
+                 "resolution", metric,
+                 lambda key: dict(marker="o", markersize=4, label=key, linestyle="--" if "points only" in key else "-"))
+    _resolution_axis(axes, rows)
     axes.set_xlabel("fine map resolution N (N×N texels per probe), log scale")
     axes.set_ylabel(label)
     axes.set_title(f"{metric.upper()} against fine resolution (mean over the views)", fontsize=10)
@@ -115,19 +121,10 @@ def error_vs_resolution(rows: Sequence[Dict[str, object]], metric: str) -> bytes
 
 def at_probe(rows: Sequence[Dict[str, object]]) -> bytes:
     figure, axes = plt.subplots(figsize=(7.0, 4.2))
-    series: Dict[str, List[Dict[str, object]]] = {}
-    for r in rows:
-        series.setdefault(f"view {r['view']}, {r['filter']}", []).append(r)
-    for key, group in series.items():
-        group = sorted(group, key=lambda r: r["resolution"])
-        pts = [(r["resolution"], r["psnr"]) for r in group if _finite(r.get("psnr"))]
-        if pts:
-            axes.plot(*zip(*pts), marker="o" if key.endswith("bilinear") else "x",
-                      linestyle="-" if key.endswith("bilinear") else ":", label=key)
-    axes.set_xscale("log", base=2)
-    resolutions = sorted({r["resolution"] for r in rows})
-    axes.set_xticks(resolutions)
-    axes.set_xticklabels([str(r) for r in resolutions])
+    _plot_series(axes, rows, lambda r: f"view {r['view']}, {r['filter']}", "resolution", "psnr",
+                 lambda key: dict(marker="o" if key.endswith("bilinear") else "x",
+                                  linestyle="-" if key.endswith("bilinear") else ":", label=key))
+    _resolution_axis(axes, rows)
     axes.set_xlabel("mesh-baked probe resolution N (N×N), log scale")
     axes.set_ylabel("PSNR, matched samples per pixel [dB]")
     axes.set_title("eye at the probe's centre, probe and ground truth filtered alike", fontsize=10)

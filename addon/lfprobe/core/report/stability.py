@@ -55,6 +55,14 @@ def _seam_mismatch(gt: dict, image: dict) -> tuple:
     return float(differs[seam].mean()), float(differs[~seam].mean())
 
 
+def _ground_truth_and_trace(ctx: RunContext, field, camera: dict, trace: dict, spp=None) -> tuple:
+    """(ground truth, probe trace) images of one camera: the pair a case compares (spp None:
+    the preset's ground-truth samples)."""
+    gt, _ = ctx.ground_truth(camera, spp=spp)
+    image, _ = field.render(_camera_text(camera), threads=ctx.threads, **trace)
+    return gt, image
+
+
 def _case(name: str, checks: str, criterion: str, passed: bool, **figures) -> Dict[str, object]:
     return {"case": name, "checks": checks, "criterion": criterion, "passed": bool(passed), **figures}
 
@@ -127,8 +135,7 @@ def run(ctx: RunContext) -> List[Dict[str, object]]:
     axis_eye = list(anchor)
     axis_camera = camera_dict(axis_eye, [axis_eye[0], axis_eye[1] + 1.0, axis_eye[2]],
                               camera["resolution"], lens=view.lens)
-    gt, _ = ctx.ground_truth(axis_camera, spp=1)
-    image, _ = field.render(_camera_text(axis_camera), threads=ctx.threads, **trace)
+    gt, image = _ground_truth_and_trace(ctx, field, axis_camera, trace, spp=1)
     seam, rest = _seam_mismatch(gt, image)
     bad = _non_finite(image)
     unknown = int(np.sum(np.asarray(image["status"]) == 2))
@@ -144,8 +151,7 @@ def run(ctx: RunContext) -> List[Dict[str, object]]:
     mlo = np.asarray(ctx.mesh.bounds[0], np.float64)
     outside = lo - 0.5 * (lo - mlo) * np.array([1.0, 1.0, 0.0])  # beyond the grid, inside the mesh bounds
     out_camera = ctx.camera(view, list(outside))
-    gt, _ = ctx.ground_truth(out_camera)
-    image, _ = field.render(_camera_text(out_camera), threads=ctx.threads, **trace)
+    gt, image = _ground_truth_and_trace(ctx, field, out_camera, trace)
     figures, _ = measure(gt, image)
     bad = _non_finite(image)
     cases.append(_case("eye outside the grid", f"eye at {np.round(outside, 3).tolist()}, outside the probe grid's box",
@@ -157,8 +163,7 @@ def run(ctx: RunContext) -> List[Dict[str, object]]:
                        camera_type="PANO_EQUIRECT")
     pano["latitude_min"], pano["latitude_max"] = -math.pi / 2, math.pi / 2
     pano["longitude_min"], pano["longitude_max"] = -math.pi, math.pi
-    gt, _ = ctx.ground_truth(pano, spp=1)
-    image, _ = field.render(_camera_text(pano), threads=ctx.threads, **trace)
+    gt, image = _ground_truth_and_trace(ctx, field, pano, trace, spp=1)
     figures, _ = measure(gt, image)
     bad = _non_finite(image)
     unknown = int(np.sum(np.asarray(image["status"]) == 2))
