@@ -6,6 +6,7 @@
 #include <string>
 #include <variant>
 
+#include <nlohmann/json.hpp>
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 #include <tbb/task_arena.h>

@@ -24,6 +24,7 @@
 
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
+#include <nlohmann/json.hpp>
 
 #include "lfprobe/error.hpp"
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 

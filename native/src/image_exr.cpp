@@ -9,6 +9,7 @@
 #include <ImfInputFile.h>
 #include <ImfOutputFile.h>
 #include <ImfStringAttribute.h>
+#include <nlohmann/json.hpp>
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/image_metadata.hpp"

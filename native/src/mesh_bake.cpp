@@ -5,6 +5,7 @@
 
 #include <glm/geometric.hpp>
 
+#include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <mutex>
 #include <utility>
@@ -162,6 +163,7 @@ const char* field_mode_name(FieldMode mode) {
 
 struct ProbeField::RadianceMipCache {
     std::once_flag built;
+    std::atomic<bool> ready{false};
     std::vector<RadianceMips> mips;
 };
 
@@ -173,6 +175,7 @@ const RadianceMips& ProbeField::radiance_mips(std::size_t i) const {
         cache.mips.resize(probes_.size());
         tbb::parallel_for(std::size_t{0}, probes_.size(),
                           [&](std::size_t k) { cache.mips[k] = RadianceMips(probes_[k]); });
+        cache.ready.store(true, std::memory_order_release);
     });
     return cache.mips.at(i);
 }
@@ -278,6 +281,11 @@ std::size_t ProbeField::memory_bytes() const {
     std::size_t bytes = 0;
     for (std::size_t i = 0; i < probes_.size(); ++i) {
         bytes += probes_[i].memory_bytes() + levels_[i].memory_bytes();
+    }
+    if (radiance_mips_->ready.load(std::memory_order_acquire)) {
+        for (const RadianceMips& m : radiance_mips_->mips) {
+            bytes += m.memory_bytes();
+        }
     }
     return bytes;
 }

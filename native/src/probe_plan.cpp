@@ -5,6 +5,7 @@
 #include <limits>
 
 #include <glm/geometric.hpp>
+#include <nlohmann/json.hpp>
 
 #include "lfprobe/error.hpp"
 

@@ -5,6 +5,7 @@
 #include <utility>
 
 #include <glm/geometric.hpp>
+#include <nlohmann/json.hpp>
 
 #include "lfprobe/color.hpp"
 #include "lfprobe/error.hpp"

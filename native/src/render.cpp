@@ -6,6 +6,7 @@
 #include <optional>
 #include <vector>
 
+#include <nlohmann/json.hpp>
 #include <tbb/parallel_for.h>
 
 #include "lfprobe/error.hpp"

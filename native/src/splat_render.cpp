@@ -9,6 +9,7 @@
 #include <optional>
 
 #include <glm/geometric.hpp>
+#include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 

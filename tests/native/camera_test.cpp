@@ -9,6 +9,7 @@
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "lfprobe/camera.hpp"
 #include "lfprobe/error.hpp"

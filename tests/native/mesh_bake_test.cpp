@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <Imath/half.h>
+#include <nlohmann/json.hpp>
 
 #include "lfprobe/mesh_bake.hpp"
 #include "lfprobe/octahedral.hpp"

@@ -10,6 +10,7 @@
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/probe_field.hpp"

@@ -6,6 +6,7 @@
 #include <thread>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "lfprobe/probe_exr.hpp"
 #include "lfprobe/probe_set.hpp"

@@ -11,6 +11,7 @@
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include "lfprobe/color.hpp"
 #include "lfprobe/error.hpp"

@@ -8,7 +8,7 @@
 #include <cstdint>
 #include <string>
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "lfprobe/camera.hpp"
 #include "lfprobe/embree_scene.hpp"

@@ -6,7 +6,7 @@
 
 #include <string>
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "lfprobe/embree_scene.hpp"
 #include "lfprobe/probe_map.hpp"

@@ -100,7 +100,8 @@ public:
     // Probe i's prefiltered radiance (the footprint filter's); every probe's are built on the
     // first call, from any thread, and kept: memory only sets that are rendered with it pay.
     [[nodiscard]] const RadianceMips& radiance_mips(std::size_t i) const;
-    // Maps and coarse levels of every probe.
+    // Maps and coarse levels of every probe, and their prefiltered radiance once a render with
+    // the footprint filter has built it.
     [[nodiscard]] std::size_t memory_bytes() const;
 
     // The mode `settings` asks for, with Auto resolved. InputError for Grid on a set that is

@@ -12,7 +12,7 @@
 #include <vector>
 
 #include <glm/vec3.hpp>
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "lfprobe/local_geometry.hpp"
 #include "lfprobe/point_cloud.hpp"

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+// The whole of nlohmann/json, not json_fwd.hpp: the manifest holds JSON values.
 #include <nlohmann/json.hpp>
 
 #include "lfprobe/probe_bake.hpp"

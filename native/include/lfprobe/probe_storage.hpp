@@ -17,7 +17,7 @@
 #include <vector>
 
 #include <glm/vec3.hpp>
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 namespace lfprobe {
 

@@ -9,7 +9,7 @@
 #include <cstdint>
 #include <string>
 
-#include <nlohmann/json.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "lfprobe/camera.hpp"
 #include "lfprobe/local_geometry.hpp"
