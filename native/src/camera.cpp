@@ -322,6 +322,22 @@ CameraRays::CameraRays(const Camera& camera)
     }
 }
 
+void CameraRays::require_finite_rays() const {
+    const auto finite = [](const glm::dvec3& v) {
+        return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+    };
+    for (const double x : {0.0, 0.5 * width_, width_}) {
+        for (const double y : {0.0, 0.5 * height_, height_}) {
+            const Ray ray = world_ray(x, y);
+            if (!finite(ray.origin) || !finite(ray.direction) || std::isnan(ray.t_min) ||
+                std::isnan(ray.t_max)) {
+                throw InputError("camera: its rays are not finite numbers: the lens, sensor "
+                                 "size, shift or panorama range is out of range");
+            }
+        }
+    }
+}
+
 glm::dvec3 CameraRays::camera_direction(double image_x, double image_y) const {
     const double raster_x = image_x;
     const double raster_y = height_ - image_y; // Cycles' raster y runs up from the bottom row

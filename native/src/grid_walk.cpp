@@ -46,6 +46,12 @@ std::size_t grid_cell_corners(const ProbeGrid& grid, const GridCell& cell,
 }
 
 GridWalk::GridWalk(const ProbeGrid& grid, const Ray& ray) : grid_(grid), ray_(ray) {
+    for (int a = 0; a < 3; ++a) {
+        if (!std::isfinite(ray.origin[a]) || !std::isfinite(ray.direction[a])) {
+            done_ = true; // no cell to walk: the caller's fallback reports the ray
+            return;
+        }
+    }
     double t_enter = ray.t_min;
     double t_exit = ray.t_max;
     for (int a = 0; a < 3; ++a) {
@@ -87,7 +93,9 @@ GridWalk::GridWalk(const ProbeGrid& grid, const Ray& ray) : grid_(grid), ray_(ra
             continue;
         }
         const double f = std::floor((start[a] - grid.origin[a]) / grid.spacing[a]);
-        cell_[ua] = static_cast<int>(std::clamp(f, 0.0, static_cast<double>(cells_[ua] - 1)));
+        // NaN-safe: a start that is not a number (an infinite t_enter) goes to cell 0.
+        cell_[ua] = static_cast<int>(
+            std::isfinite(f) ? std::clamp(f, 0.0, static_cast<double>(cells_[ua] - 1)) : 0.0);
         step_[ua] = ray.direction[a] > 0.0 ? 1 : (ray.direction[a] < 0.0 ? -1 : 0);
     }
     t_exit_ = t_exit;

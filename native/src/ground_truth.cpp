@@ -41,6 +41,7 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
     const float inv_samples = 1.0f / static_cast<float>(n * n);
     std::atomic<std::uint64_t> rays{0};
     const CameraRays camera_rays(camera);
+    camera_rays.require_finite_rays();
     const double seconds = for_each_image_tile(
         camera.width, camera.height, settings.tile_size, progress, [&](const ImageTile& r) {
             std::uint64_t tile_rays = 0;

@@ -294,6 +294,7 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
     }
     const glm::dvec3 offset = field.world_offset();
     const CameraRays camera_rays(camera);
+    camera_rays.require_finite_rays();
     // With an odd n the middle stratum is the pixel centre: its ray is the centre's.
     const int middle = n % 2 == 1 ? n / 2 : -1;
     const bool centre_is_sample =

@@ -162,3 +162,24 @@ TEST(GroundTruth, EmbreePacketsCountTheHitsOfSingleRays) {
 
 } // namespace
 } // namespace lfprobe
+
+namespace lfprobe {
+namespace {
+
+TEST(GroundTruth, ACameraWhoseRaysAreNotFiniteIsAClearErrorNotAnEmbreeAbort) {
+    // Each key passes the camera file's checks on its own; together they make rays of inf/NaN,
+    // which Embree's debug assertion aborts on.
+    const Mesh mesh = read_mesh(box_room_obj());
+    const EmbreeScene scene(mesh);
+    Camera tiny_lens = Camera::look_at({0.3, -1.0, 1.2}, {0.5, 3.0, 1.0}, 16, 12);
+    tiny_lens.lens = 1e-300;
+    Camera huge_shift = Camera::look_at({0.3, -1.0, 1.2}, {0.5, 3.0, 1.0}, 16, 12);
+    huge_shift.shift_x = 1e300;
+    for (const Camera& camera : {tiny_lens, huge_shift}) {
+        EXPECT_THROW((void)render_ground_truth(scene, camera), InputError);
+        EXPECT_THROW((void)embree_throughput(scene, camera, 1), InputError);
+    }
+}
+
+} // namespace
+} // namespace lfprobe

@@ -407,3 +407,30 @@ TEST(Render, RaysStartedAtTheirAnswersBeginWhereTheImageEnds) {
 
 } // namespace
 } // namespace lfprobe
+
+namespace lfprobe {
+namespace {
+
+TEST(Render, ACameraWhoseRaysAreNotFiniteIsAClearErrorInEveryMode) {
+    // A lens of 1e-300 mm passes the camera file's check (positive) but makes rays of inf/NaN:
+    // the grid walk once cast a NaN cell index to int and crashed.
+    const ProbeField& field = baked_box_room();
+    Camera camera = Camera::look_at({0.0, -0.5, 1.3}, {0.0, 1.0, 1.0}, 16, 12, 20.0);
+    camera.lens = 1e-300;
+    for (const FieldMode mode : {FieldMode::Grid, FieldMode::Nearest}) {
+        RenderSettings settings;
+        settings.trace.mode = mode;
+        EXPECT_THROW((void)render_probe_view(field, camera, settings), InputError);
+        EXPECT_THROW((void)probe_trace_throughput(field, camera, settings, 1), InputError);
+    }
+    // A ray that is not finite, handed to the field directly, is refused the same way.
+    Ray ray;
+    ray.origin = {0.0, 0.0, 1.2};
+    ray.direction = {std::nan(""), 0.0, 0.0};
+    FieldTraceSettings grid;
+    grid.mode = FieldMode::Grid;
+    EXPECT_THROW((void)field.trace(ray, grid), InputError);
+}
+
+} // namespace
+} // namespace lfprobe

@@ -107,6 +107,12 @@ class CameraRays {
 public:
     explicit CameraRays(const Camera& camera);
 
+    // InputError unless every ray of the image is finite: a lens, sensor, shift or angle range
+    // that passes the camera file's checks one by one can still make rays of inf or NaN
+    // together (a lens of 1e-300 mm), which no renderer must see. The rays are linear in the
+    // image's coordinates up to normalisation, so the corners and the centre decide.
+    void require_finite_rays() const;
+
     [[nodiscard]] glm::dvec3 camera_direction(double image_x, double image_y) const;
     [[nodiscard]] Ray world_ray(double image_x, double image_y) const;
     [[nodiscard]] Ray pixel_ray(int x, int y, double sample_x = 0.5, double sample_y = 0.5) const {

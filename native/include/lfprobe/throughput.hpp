@@ -36,6 +36,7 @@ struct ThroughputResult {
     std::vector<Ray> rays(static_cast<std::size_t>(camera.width) *
                           static_cast<std::size_t>(camera.height));
     const CameraRays camera_rays(camera);
+    camera_rays.require_finite_rays();
     for (int y = 0; y < camera.height; ++y) {
         for (int x = 0; x < camera.width; ++x) {
             rays[static_cast<std::size_t>(y) * static_cast<std::size_t>(camera.width) +
