@@ -20,8 +20,8 @@ bl_info = {
 }
 
 # Registered in this order, unregistered in reverse (the layout contract of the add-on).
-_MODULE_NAMES = ("properties", "scan_import", "grid", "overlay", "bake", "place_views", "panels", "engine",
-                 "compare")
+_MODULE_NAMES = ("properties", "operators.scan_import", "operators.grid", "ui.overlay", "operators.bake",
+                 "operators.place_views", "ui.panels", "engine", "operators.compare")
 _registered = []
 
 

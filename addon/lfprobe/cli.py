@@ -198,7 +198,7 @@ def _cmd_bake(package, args) -> int:
     import bpy
 
     grid_module = _blender_module(package, "grid")
-    bake = _blender_module(package, "bake")
+    bake = _blender_module(package, "operators.bake")
     scene = _scene(args.scene)
     grids = _grids(grid_module, scene, args.grid)
     if not grids:
@@ -224,7 +224,7 @@ def _cmd_place(package, args) -> int:
     import bpy
 
     grid_module = _blender_module(package, "grid")
-    place_views = _blender_module(package, "place_views")
+    place_views = _blender_module(package, "operators.place_views")
     scene = _scene(args.scene)
     grids = _grids(grid_module, scene, args.grid)
     if len(grids) != 1:
@@ -290,7 +290,7 @@ def _cmd_render(package, args) -> int:
 def _cmd_compare(package, args) -> int:
     import bpy
 
-    compare = _blender_module(package, "compare")
+    compare = _blender_module(package, "operators.compare")
     scene = _scene(args.scene)
     references = []
     if args.reference_collection:

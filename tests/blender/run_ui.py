@@ -59,7 +59,7 @@ def scenario():
         return 0.02
 
     bpy.app.timers.register(tick)
-    jobs = helpers.addon("blender.job_modal").running_labels
+    jobs = helpers.addon("blender.operators.job_modal").running_labels
     with bpy.context.temp_override(**_window_context()):
         started = bpy.ops.import_scene.lfprobe_scan(
             "EXEC_DEFAULT", directory=folder, files=[{"name": "room.xyz"}]
@@ -117,13 +117,13 @@ def scenario():
            open(os.path.join(probe_dir, "manifest.json")).read() == manifest_before)
 
     # The overlay draws the grid with this Blender's builtin shaders.
-    overlay = helpers.addon("blender.overlay")
+    overlay = helpers.addon("blender.ui.overlay")
     overlay._batch_cache.clear()
-    helpers.addon("blender.scan_display")._batch_cache.clear()
+    helpers.addon("blender.ui.scan_display")._batch_cache.clear()
     with bpy.context.temp_override(**_window_context()):
         bpy.ops.wm.redraw_timer(type="DRAW_WIN", iterations=1)
     _check("overlay draws the grid", grid_obj.name in overlay._batch_cache)
-    _check("the scan is drawn in its colours", scan.name in helpers.addon("blender.scan_display")._batch_cache)
+    _check("the scan is drawn in its colours", scan.name in helpers.addon("blender.ui.scan_display")._batch_cache)
     # The panels draw (a Python error in a draw() only prints a traceback: the wrapper,
     # tools/blender_tests.sh, fails the run on any traceback in the output).
     window = bpy.context.window_manager.windows[0]

@@ -24,7 +24,7 @@ def _registered() -> dict:
 
 
 def test_enable_disable_twice():
-    overlay = helpers.addon("blender.overlay")
+    overlay = helpers.addon("blender.ui.overlay")
     for round_ in range(2):
         state = _registered()
         assert all(state.values()), f"round {round_}: not registered: {state}"

@@ -175,10 +175,11 @@ def test_plan_from_data_sizes_moves_and_shows_the_probes():
     manifest = helpers.addon("core.probe_set").read_manifest(helpers.addon("blender.grid").probe_dir_abspath(grid_obj))
     for record, planned in zip(manifest["probes"], plan):
         assert record["resolution"] == planned["resolution"] <= 512
-    overlay = helpers.addon("blender.overlay")
+    overlay = helpers.addon("blender.ui.overlay")
+    grid_overlay = helpers.addon("core.grid_overlay")
     _positions, colours, _lines = overlay.overlay_geometry(grid_obj)
     for colour, planned in zip(colours, plan):
         if planned["dropped"]:
-            np.testing.assert_allclose(colour, overlay.DROPPED_COLOUR, atol=1e-6)
+            np.testing.assert_allclose(colour, grid_overlay.DROPPED_COLOUR, atol=1e-6)
         elif planned["moved"]:
-            np.testing.assert_allclose(colour, overlay.MOVED_COLOUR, atol=1e-6)
+            np.testing.assert_allclose(colour, grid_overlay.MOVED_COLOUR, atol=1e-6)

@@ -182,7 +182,7 @@ def test_viewport_camera_and_refinement_match_the_camera_render():
     rays agree to float precision, not bit for bit; refinement ends on the full-size image."""
     grid, camera = probe_scene.traced_scene()
     camera_export = helpers.addon("blender.camera_export")
-    viewport = helpers.addon("blender.viewport")
+    viewport = helpers.addon("blender.engine.viewport")
     probe_view = helpers.addon("blender.probe_view")
     scene = bpy.context.scene
     depsgraph = bpy.context.evaluated_depsgraph_get()

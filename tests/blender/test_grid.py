@@ -103,10 +103,11 @@ def test_overlay_points_coloured_by_coverage_and_cell_lines():
     grid_obj.scale = (2.0, 1.0, 0.5)
     grid_obj.lfprobe_grid.counts = (3, 2, 2)
     bpy.context.view_layer.update()
-    overlay = helpers.addon("blender.overlay")
+    overlay = helpers.addon("blender.ui.overlay")
+    grid_overlay = helpers.addon("core.grid_overlay")
     points, colours, lines = overlay.overlay_geometry(grid_obj)
     assert points.shape == (12, 3) and colours.shape == (12, 4)
-    np.testing.assert_allclose(colours, np.tile(overlay.UNBAKED_COLOUR, (12, 1)))
+    np.testing.assert_allclose(colours, np.tile(grid_overlay.UNBAKED_COLOUR, (12, 1)))
     # Lines: along x one per (y, z) row (4), along y one per (x, z) (6), along z per (x, y) (6).
     assert lines.shape == (2 * 16, 3)
     segments = lines.reshape(-1, 2, 3)
@@ -123,4 +124,4 @@ def test_overlay_points_coloured_by_coverage_and_cell_lines():
     # Coverage of another grid size is not shown as if it were this one's.
     grid_obj.lfprobe_grid.counts = (2, 2, 2)
     _, colours, _ = overlay.overlay_geometry(grid_obj)
-    np.testing.assert_allclose(colours, np.tile(overlay.UNBAKED_COLOUR, (8, 1)))
+    np.testing.assert_allclose(colours, np.tile(grid_overlay.UNBAKED_COLOUR, (8, 1)))

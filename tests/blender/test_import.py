@@ -62,7 +62,7 @@ def test_pump_xyz_points_colours_and_first_point():
 def test_viewport_draws_the_display_points_in_srgb():
     path = helpers.shared_data("scans/pumpA_xyzrgb.xyz")
     (obj,) = helpers.import_scans(path)
-    positions, colours = helpers.addon("blender.scan_display").display_arrays(obj)
+    positions, colours = helpers.addon("blender.ui.scan_display").display_arrays(obj)
     np.testing.assert_array_equal(positions, _vertices(obj))
     # The viewport draws display-referred colour: the file's 8-bit sRGB values again.
     np.testing.assert_allclose(colours[0, :3] * 255, _first_data_line(path)[3:6], atol=0.01)

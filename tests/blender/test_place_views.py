@@ -97,7 +97,7 @@ class _Layout:
 
 def _draw_panels(grid_obj) -> dict:
     """Draws the grid panel and its Probes for Views sub-panel; returns what they drew."""
-    panels = helpers.addon("blender.panels")
+    panels = helpers.addon("blender.ui.panels")
     layout = _Layout()
     context = type("Context", (), {"object": grid_obj})()
     for panel in (panels.LFPROBE_PT_grid, panels.LFPROBE_PT_grid_views):
@@ -142,12 +142,13 @@ def test_adds_a_probe_for_the_hidden_view_in_the_scene_frame():
     assert added["view"] == "HiddenCam" and added["resolution"] == RESOLUTION
     assert placement["memory_bytes"] == helpers.addon("core.native").load().ProbeField.load(probe_dir).memory_bytes
 
-    overlay = helpers.addon("blender.overlay")
+    overlay = helpers.addon("blender.ui.overlay")
+    grid_overlay = helpers.addon("core.grid_overlay")
     positions, colours, _lines = overlay.overlay_geometry(grid_obj)
     assert positions.shape == (3, 3) and colours.shape == (3, 4)
     np.testing.assert_allclose(positions[2], HIDDEN_EYE, atol=1e-4)
-    np.testing.assert_allclose(colours[2], overlay.ADDED_COLOUR)
-    assert not np.allclose(colours[:2], overlay.ADDED_COLOUR)
+    np.testing.assert_allclose(colours[2], grid_overlay.ADDED_COLOUR)
+    assert not np.allclose(colours[:2], grid_overlay.ADDED_COLOUR)
     drawn = _draw_panels(grid_obj)
     line = next(text for text in drawn["labels"] if "added (magenta)" in text)
     assert line.startswith("1 probe added (magenta) for 2 views: UNKNOWN") and line.endswith("MiB, target met"), line
@@ -196,8 +197,8 @@ def test_scene_camera_path_every_k_frames_and_the_memory_budget():
     assert placement["budget_mib"] == grid.budget_mib
     manifest = helpers.addon("core.probe_set").read_manifest(helpers.addon("blender.grid").probe_dir_abspath(grid_obj))
     assert len(manifest["probes"]) == 2
-    assert "memory budget reached" in helpers.addon("blender.place_views").summary_line(placement)
-    assert helpers.addon("blender.overlay").overlay_geometry(grid_obj)[0].shape == (2, 3)
+    assert "memory budget reached" in helpers.addon("blender.operators.place_views").summary_line(placement)
+    assert helpers.addon("blender.ui.overlay").overlay_geometry(grid_obj)[0].shape == (2, 3)
 
 
 def test_bad_input_reports_an_error_and_keeps_the_previous_set():
@@ -247,7 +248,7 @@ def test_cancel_keeps_the_previous_set():
     bpy.ops.object.lfprobe_bake(grid=grid_obj.name)
     probe_dir = helpers.addon("blender.grid").probe_dir_abspath(grid_obj)
     manifest = open(os.path.join(probe_dir, "manifest.json")).read()
-    job_modal = helpers.addon("blender.job_modal")
+    job_modal = helpers.addon("blender.operators.job_modal")
     stages = []
 
     class StopWhenPlacing:

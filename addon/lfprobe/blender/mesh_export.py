@@ -12,12 +12,13 @@ material show their active colour attribute, else Blender's default grey.
 
 from __future__ import annotations
 
-from typing import Iterable, List, Optional, Sequence
+from typing import Iterable, Optional, Sequence
 
 import numpy as np
 
 from ..core import native
 from ..core.errors import InputError
+from ..core.mesh_arrays import MeshParts
 
 DEFAULT_BASE_COLOR = (0.8, 0.8, 0.8)  # Blender's default material colour
 _COLOR_NODES = {"VERTEX_COLOR", "ATTRIBUTE"}  # Color Attribute node (3.x/4.x), Attribute node
@@ -120,31 +121,9 @@ def _corner_normals(mesh, loops: np.ndarray) -> np.ndarray:
     return normals.reshape(-1, 3)[loops]
 
 
-class _Arrays:
-    """The mesh_from_arrays inputs, gathered object by object."""
-
-    def __init__(self):
-        self.vertices: List[np.ndarray] = []
-        self.triangles: List[np.ndarray] = []
-        self.uvs: List[Optional[np.ndarray]] = []
-        self.colors: List[Optional[np.ndarray]] = []
-        self.normals: List[np.ndarray] = []
-        self.material: List[np.ndarray] = []
-        self.object: List[np.ndarray] = []
-        self.materials: List[_Material] = []
-        self.material_index = {}
-        self.object_names: List[str] = []
-        self.vertex_count = 0
-
-    def material_slot(self, material) -> int:
-        key = material.name if material is not None else None
-        if key not in self.material_index:
-            self.material_index[key] = len(self.materials)
-            self.materials.append(material_of(material))
-        return self.material_index[key]
-
-
-def _add_object(arrays: _Arrays, obj, evaluated, world_offset: Sequence[float]) -> None:
+def _add_object(parts: MeshParts, obj, evaluated, world_offset: Sequence[float]) -> None:
+    """Reads one evaluated object's triangles and corner arrays into parts (core.mesh_arrays
+    moves them to the world frame)."""
     mesh = evaluated.to_mesh()
     try:
         mesh.calc_loop_triangles()
@@ -153,9 +132,6 @@ def _add_object(arrays: _Arrays, obj, evaluated, world_offset: Sequence[float]) 
             return
         co = np.empty(len(mesh.vertices) * 3, dtype=np.float32)
         mesh.vertices.foreach_get("co", co)
-        matrix = np.array(evaluated.matrix_world, dtype=np.float64)
-        local = co.reshape(-1, 3).astype(np.float64)
-        world = local @ matrix[:3, :3].T + matrix[:3, 3] + np.asarray(world_offset, dtype=np.float64)
         tris = np.empty(count * 3, dtype=np.int64)
         mesh.loop_triangles.foreach_get("vertices", tris)
         loops = np.empty(count * 3, dtype=np.int64)
@@ -163,49 +139,21 @@ def _add_object(arrays: _Arrays, obj, evaluated, world_offset: Sequence[float]) 
         slots = np.empty(count, dtype=np.int64)
         mesh.loop_triangles.foreach_get("material_index", slots)
 
+        uvs = None
         uv_layer = mesh.uv_layers.active
         if uv_layer is not None:
             uv = np.empty(len(uv_layer.data) * 2, dtype=np.float32)
             uv_layer.data.foreach_get("uv", uv)
-            arrays.uvs.append(uv.reshape(-1, 2)[loops])
-        else:
-            arrays.uvs.append(None)
+            uvs = uv.reshape(-1, 2)[loops]
 
-        # Material slots → global material indices; a slot without a material shades grey.
+        # Material slots → the mesh's material indices; a slot without a material shades grey.
         materials = [slot.material for slot in evaluated.material_slots] or [None]
-        slot_to_global = np.array([arrays.material_slot(m) for m in materials], dtype=np.int64)
-        global_material = slot_to_global[np.clip(slots, 0, len(materials) - 1)]
-
-        colors = _corner_colors(mesh, loops)
-        uses_colors = np.array([arrays.materials[g].uses_colors for g in slot_to_global])
-        if colors is not None:
-            # Triangles whose material ignores the colour attribute multiply by white.
-            colors = np.where(uses_colors[np.clip(slots, 0, len(materials) - 1)].repeat(3)[:, None],
-                              colors, 1.0).astype(np.float32)
-        arrays.colors.append(colors)
-
-        normal_matrix = np.linalg.inv(matrix[:3, :3]).T
-        normals = _corner_normals(mesh, loops).astype(np.float64) @ normal_matrix.T
-        lengths = np.linalg.norm(normals, axis=1, keepdims=True)
-        arrays.normals.append((normals / np.where(lengths > 0, lengths, 1.0)).astype(np.float32))
-
-        arrays.vertices.append(world)
-        arrays.triangles.append(tris.reshape(-1, 3) + arrays.vertex_count)
-        arrays.material.append(global_material)
-        arrays.object.append(np.full(count, len(arrays.object_names), dtype=np.int64))
-        arrays.object_names.append(obj.name)
-        arrays.vertex_count += len(world)
+        slot_materials = [parts.material_slot(m.name if m is not None else None, lambda m=m: material_of(m))
+                          for m in materials]
+        parts.add_object(obj.name, co, evaluated.matrix_world, world_offset, tris, slots, slot_materials,
+                         uvs, _corner_colors(mesh, loops), _corner_normals(mesh, loops))
     finally:
         evaluated.to_mesh_clear()
-
-
-def _stack_optional(parts: List[Optional[np.ndarray]], sizes: List[int], width: int, fill: float):
-    """Concatenates per-object corner arrays; objects without one get `fill`; None if none has."""
-    if all(p is None for p in parts):
-        return None
-    return np.concatenate([
-        p if p is not None else np.full((n, width), fill, dtype=np.float32) for p, n in zip(parts, sizes)
-    ])
 
 
 def native_mesh_from_objects(objects: Iterable, depsgraph, world_offset: Sequence[float] = (0.0, 0.0, 0.0),
@@ -214,24 +162,12 @@ def native_mesh_from_objects(objects: Iterable, depsgraph, world_offset: Sequenc
     coordinates: world = world_offset + Blender position (the scene's frame offset, so
     that meshes line up with georeferenced scans and their probe sets)."""
     _native = native.load()
-    arrays = _Arrays()
+    parts = MeshParts()
     for obj in objects:
         if obj.type != "MESH":
             raise MeshExportError(f"object '{obj.name}' is a {obj.type.lower()}, not a mesh")
-        _add_object(arrays, obj, obj.evaluated_get(depsgraph), world_offset)
-    if not arrays.triangles:
+        _add_object(parts, obj, obj.evaluated_get(depsgraph), world_offset)
+    if not parts.triangles:
         names = ", ".join(f"'{o.name}'" for o in objects) or "none given"
         raise MeshExportError(f"no triangles to trace in the reference objects ({names}): they need faces")
-    corners = [3 * len(t) for t in arrays.triangles]
-    return _native.mesh_from_arrays(
-        np.concatenate(arrays.vertices),
-        np.concatenate(arrays.triangles),
-        corner_uvs=_stack_optional(arrays.uvs, corners, 2, 0.0),
-        corner_colors=_stack_optional(arrays.colors, corners, 3, 1.0),
-        corner_normals=np.concatenate(arrays.normals),
-        material=np.concatenate(arrays.material),
-        object=np.concatenate(arrays.object),
-        materials=[m.as_dict() for m in arrays.materials],
-        object_names=arrays.object_names,
-        name=name,
-    )
+    return _native.mesh_from_arrays(**parts.mesh_arrays(name))

@@ -21,21 +21,9 @@ import numpy as np
 
 from .properties import COLOR_ATTRIBUTE
 
-DISPLAY_SEED = 20240601  # fixed: the same file always shows the same subsample
 NODE_GROUP_NAME = "lfprobe Scan Points"
 MATERIAL_NAME = "lfprobe Scan Colour"
 MODIFIER_NAME = "lfprobe Points"
-
-
-def display_indices(point_count: int, limit: int) -> np.ndarray | None:
-    """The points shown in the viewport: all of them up to `limit`, else a deterministic
-    random subset (a stride would alias with the scanner's row/column pattern), in file order."""
-    if limit <= 0 or point_count <= limit:
-        return None
-    rng = np.random.default_rng(DISPLAY_SEED)
-    chosen = rng.choice(point_count, size=limit, replace=False)
-    chosen.sort()
-    return chosen
 
 
 def _new_socket(group, name: str, in_out: str, socket_type: str):

@@ -13,15 +13,15 @@ import shutil
 import bpy
 from bpy.props import StringProperty
 
-from ..core import native, pipeline
-from ..core.atomic_write import replace_folder
-from ..core.cloud_transform import to_world, transform_scans
-from ..core.errors import InputError
-from ..core import probe_storage
-from ..core.probe_set import read_manifest
-from ..core.sources import default_cache_dir, describe_scan
-from . import grid as grid_module
-from . import scan_object
+from ...core import native, pipeline
+from ...core.atomic_write import replace_folder
+from ...core.cloud_transform import to_world, transform_scans
+from ...core.errors import InputError
+from ...core import probe_storage
+from ...core.probe_set import read_manifest
+from ...core.sources import default_cache_dir, describe_scan
+from .. import grid as grid_module
+from .. import scan_object
 from . import job_modal
 from .job_modal import NativeJobOperator
 
@@ -212,7 +212,7 @@ class LFPROBE_OT_bake(GridJobOperator, bpy.types.Operator):
         return inputs.start_load()
 
     def _start_mesh_bake(self, context, meshes):
-        from . import mesh_export  # engineer B's module: Blender meshes → native Mesh
+        from .. import mesh_export  # Blender meshes → native Mesh
 
         _native = native.load()
         inputs = self._inputs

@@ -12,12 +12,12 @@ import os
 import bpy
 from bpy.props import BoolProperty, IntProperty, StringProperty
 
-from ..core.compare import DEFAULT_PPD, CompareReport, check_samples_per_pixel
-from ..core.errors import InputError
-from . import probe_view
+from ...core.compare import DEFAULT_PPD, CompareReport, check_samples_per_pixel
+from ...core.errors import InputError
+from .. import probe_view
 from .job_modal import NativeJobOperator
 from .menu_registration import classes_with_menu_entry
-from .mesh_export import native_mesh_from_objects
+from ..mesh_export import native_mesh_from_objects
 
 IMAGE_NAMES = {"ground_truth_preview": "LFP Ground Truth", "probes_preview": "LFP Probes", "error": "LFP FLIP Error"}
 

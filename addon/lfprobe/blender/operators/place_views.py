@@ -18,17 +18,18 @@ import shutil
 import bpy
 from bpy.props import CollectionProperty, StringProperty
 
-from ..core import adaptive, native
-from ..core.atomic_write import replace_folder
-from ..core.cloud_transform import to_local
-from ..core.errors import InputError
-from ..core.probe_set import read_manifest
+from ...core import adaptive, native
+from ...core.atomic_write import replace_folder
+from ...core.cloud_transform import to_local
+from ...core.errors import InputError
+from ...core.probe_set import read_manifest
 from . import bake
-from . import camera_export
-from . import grid as grid_module
+from .. import camera_export
+from .. import grid as grid_module
 from . import job_modal
-from . import probe_view
-from .scene_objects import object_of_type
+from .. import probe_view
+from ..properties.camera_name import LFProbeCameraName
+from ..scene_objects import object_of_type
 
 # The short words for adaptive.STOP_REASONS that the panel's one line has room for.
 STOP_WORDS = {
@@ -41,11 +42,6 @@ STOP_WORDS = {
 
 class ViewsError(InputError):
     """No views to place probes for (the message says what to select or set)."""
-
-
-class LFProbeCameraName(bpy.types.PropertyGroup):
-    """A camera object's name (PropertyGroup.name): the operator's `cameras`, as file import
-    operators take `files`."""
 
 
 def view_cameras(context, grid, offset, names=()) -> list:

@@ -20,7 +20,7 @@ from typing import Callable, List, Optional, Tuple
 
 import numpy as np
 
-from .camera_export import band_of
+from ..camera_export import band_of
 
 LEVELS = (8, 4, 2, 1)  # downscale factor of each refinement level, coarsest first
 BAND_RAYS = 40_000  # rays per band: a few tens of milliseconds between chances to restart

@@ -8,8 +8,8 @@ from __future__ import annotations
 import bpy
 import numpy as np
 
-from ..core.colour import srgb_encode
-from .properties import COLOR_ATTRIBUTE
+from ...core.colour import srgb_encode
+from ..properties import COLOR_ATTRIBUTE
 from .draw_handler import ViewportDrawHandler
 
 POINT_SIZE = 2.0

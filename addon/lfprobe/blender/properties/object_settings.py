@@ -3,7 +3,7 @@
 Scan cloud: a mesh of vertices only (a display subsample of the cloud) with its colours in
 the point attribute "Col" and ``obj.lfprobe_scan``. Probe grid: an Empty whose cube
 [-1, 1]^3, transformed by its location and scale, is the grid's box, with ``obj.lfprobe_grid``.
-The engine's scene settings (``scene.lfprobe_render``) belong to engine.py.
+The engine's scene settings (``scene.lfprobe_render``) are in render_settings.py.
 """
 
 import json
@@ -232,21 +232,3 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
             return list(json.loads(self.coverage_json or "[]"))
         except ValueError:
             return []
-
-
-_CLASSES = (LFProbeScanProperties, LFProbeGridSource, LFProbeGridProperties)
-
-
-_register_classes, _unregister_classes = bpy.utils.register_classes_factory(_CLASSES)
-
-
-def register():
-    _register_classes()
-    bpy.types.Object.lfprobe_scan = PointerProperty(type=LFProbeScanProperties)
-    bpy.types.Object.lfprobe_grid = PointerProperty(type=LFProbeGridProperties)
-
-
-def unregister():
-    del bpy.types.Object.lfprobe_grid
-    del bpy.types.Object.lfprobe_scan
-    _unregister_classes()

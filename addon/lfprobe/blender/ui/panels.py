@@ -9,9 +9,9 @@ import textwrap
 
 import bpy
 
-from ..core import native, probe_storage
-from . import grid as grid_module
-from . import place_views
+from ...core import native, probe_storage
+from .. import grid as grid_module
+from ..operators import place_views
 
 
 def _native_problem(layout) -> None:

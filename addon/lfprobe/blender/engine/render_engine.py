@@ -18,91 +18,13 @@ import traceback
 
 import bpy
 import numpy as np
-from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
 
-from ..core.colour import srgb_display_rgba
-from ..core.errors import InputError
-from ..core.trace_target import forget_fields
-from . import grid as grid_module, probe_view
+from ...core.colour import srgb_display_rgba
+from ...core.errors import InputError
+from .. import probe_view
 from .viewport import ProgressiveView
 
 TRACE_PASSES = (("LFP Status", "status"), ("LFP Probe", "probe"), ("LFP Steps", "steps"))
-
-
-def _grid_poll(_settings, obj):
-    return grid_module.is_grid(obj)
-
-
-def _redraw_viewports(_settings, context):
-    # Trace settings are not part of the depsgraph: tag the views so that they refine again.
-    for area in getattr(context.screen, "areas", ()):
-        if area.type == "VIEW_3D":
-            area.tag_redraw()
-
-
-class LFProbeRenderSettings(bpy.types.PropertyGroup):
-    grid: PointerProperty(
-        name="Probe Grid",
-        type=bpy.types.Object,
-        poll=_grid_poll,
-        description="The baked probe grid to trace (empty: the first baked grid, by name)",
-        update=_redraw_viewports,
-    )
-    mode: EnumProperty(
-        name="Probe Order",
-        items=(
-            ("auto", "Auto", "Walk the grid's cells for a grid set, nearest probes first otherwise"),
-            ("nearest", "Nearest", "Try the probes nearest the ray first"),
-            ("grid", "Grid Walk", "Walk the cells the ray crosses (3D DDA) and try their corner probes"),
-        ),
-        default="auto",
-        update=_redraw_viewports,
-    )
-    thickness: FloatProperty(
-        name="Thickness",
-        description="How far behind the surface a probe saw a ray still counts as hitting it",
-        min=0.0,
-        soft_max=0.2,
-        default=0.02,
-        unit="LENGTH",
-        precision=3,
-        update=_redraw_viewports,
-    )
-    threads: IntProperty(
-        name="Threads",
-        description="CPU cores to trace with (0: all); the image is the same for any count",
-        min=0,
-        soft_max=64,
-        default=0,
-        update=_redraw_viewports,
-    )
-    samples: IntProperty(
-        name="Pixel Samples",
-        description="F12 and Compare: n×n rays per pixel on a stratified grid, their colour and coverage "
-                    "averaged (anti-aliasing; depth and passes from the pixel centre). 1: one ray through "
-                    "each pixel centre. The viewport traces one ray per pixel",
-        min=1,
-        max=8,
-        default=2,
-    )
-    radiance_filter: EnumProperty(
-        name="Radiance Filter",
-        items=(
-            ("bilinear", "Bilinear", "Interpolate between the texels around a hit that lie on the same surface"),
-            ("nearest", "Nearest", "The colour of the one texel the ray met (the paper's lookup)"),
-        ),
-        default="bilinear",
-        update=_redraw_viewports,
-    )
-    blend: IntProperty(
-        name="Blend Probes",
-        description="Probes a hit's colour is blended from, each weighted by how finely it sees the point "
-                    "(1: the first probe that answers alone)",
-        min=1,
-        max=8,
-        default=4,
-        update=_redraw_viewports,
-    )
 
 
 def _to_bottom_up(array: np.ndarray, channels: int) -> np.ndarray:
@@ -263,64 +185,3 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
         gpu.state.blend_set("ALPHA_PREMULT")
         draw_texture_2d(self._texture, (0, 0), width, height)
         gpu.state.blend_set("NONE")
-
-
-class RENDER_PT_lfprobe_trace(bpy.types.Panel):
-    bl_label = "Light Field Probes"
-    bl_space_type = "PROPERTIES"
-    bl_region_type = "WINDOW"
-    bl_context = "render"
-    COMPAT_ENGINES = {LFProbeRenderEngine.bl_idname}
-
-    @classmethod
-    def poll(cls, context):
-        return context.engine in cls.COMPAT_ENGINES
-
-    def draw(self, context):
-        layout = self.layout
-        layout.use_property_split = True
-        settings = context.scene.lfprobe_render
-        layout.prop(settings, "grid")
-        if settings.grid is None:
-            baked = grid_module.baked_grids(context.scene)
-            layout.label(text=f"Tracing: {baked[0].name}" if baked else "No baked probe grid",
-                         icon="INFO" if baked else "ERROR")
-        layout.prop(settings, "mode")
-        layout.prop(settings, "thickness")
-        layout.prop(settings, "samples")
-        layout.prop(settings, "radiance_filter")
-        layout.prop(settings, "blend")
-        layout.prop(settings, "threads")
-
-
-# Blender's own panels that apply to any engine (output, dimensions, camera lens, ...) list
-# the engines they show for, with "BLENDER_RENDER" standing for external engines.
-_SHARED_PANEL_EXCLUDE = {"RENDER_PT_color_management", "RENDER_PT_simplify"}
-
-
-def _shared_panels():
-    for panel in bpy.types.Panel.__subclasses__():
-        engines = getattr(panel, "COMPAT_ENGINES", None)
-        if engines is not None and "BLENDER_RENDER" in engines and panel.__name__ not in _SHARED_PANEL_EXCLUDE:
-            yield panel
-
-
-_CLASSES = (LFProbeRenderSettings, LFProbeRenderEngine, RENDER_PT_lfprobe_trace)
-
-
-_register_classes, _unregister_classes = bpy.utils.register_classes_factory(_CLASSES)
-
-
-def register():
-    _register_classes()
-    bpy.types.Scene.lfprobe_render = PointerProperty(type=LFProbeRenderSettings)
-    for panel in _shared_panels():
-        panel.COMPAT_ENGINES.add(LFProbeRenderEngine.bl_idname)
-
-
-def unregister():
-    for panel in _shared_panels():
-        panel.COMPAT_ENGINES.discard(LFProbeRenderEngine.bl_idname)
-    del bpy.types.Scene.lfprobe_render
-    _unregister_classes()
-    forget_fields()

@@ -4,29 +4,17 @@ readers (through lfprobe's parse cache) off the main thread and makes scan cloud
 import os
 
 import bpy
-import numpy as np
 from bpy.props import BoolProperty, CollectionProperty, FloatProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
-from ..core import native
-from ..core.sources import default_cache_dir
-from . import scan_object
+from ...core import native
+from ...core.scan_points import automatic_point_radius, in_shared_frame, object_groups, object_points
+from ...core.sources import default_cache_dir
+from .. import scan_object
 from .job_modal import NativeJobOperator
 from .menu_registration import classes_with_menu_entry
 
 SCAN_EXTENSIONS = (".xyz", ".pts", ".ply", ".txt", ".asc")
-# Clouds further than this from the scene's frame keep their own world offset: float32
-# positions (Blender's) hold about 1 mm at 10 km.
-SHARED_FRAME_LIMIT = 10_000.0
-
-
-def automatic_point_radius(bounds_min, bounds_max, displayed: int) -> float:
-    """Half the mean point spacing, taking the points to lie on the box's faces (a room)."""
-    size = np.maximum(np.asarray(bounds_max, float) - np.asarray(bounds_min, float), 1e-6)
-    area = 2.0 * (size[0] * size[1] + size[1] * size[2] + size[2] * size[0])
-    return float(0.5 * np.sqrt(area / max(displayed, 1)))
-
-
 def _world_scanner(scanner, offset):
     if scanner is None:
         return None
@@ -103,29 +91,18 @@ class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator
     def finish_job(self, context, cloud):
         paths = self._import_paths
         collection = context.collection or context.scene.collection
-        offset = np.array(cloud.world_offset, dtype=float)
-        positions = cloud.positions
-        # Share the scene's local frame when close enough, so scans line up in Blender.
-        frame = scan_object.frame_offset(context.scene)
-        if frame is not None and np.any(np.asarray(frame) != offset):
-            shift = offset - np.asarray(frame)
-            if np.abs(shift).max() + np.abs(positions).max() < SHARED_FRAME_LIMIT:
-                positions = (positions.astype(np.float64) + shift).astype(np.float32)
-                offset = np.asarray(frame, dtype=float)
-            else:
-                self.report(
-                    {"WARNING"},
-                    f"{os.path.basename(paths[0])}: far from the other scans' frame; "
-                    f"it keeps its own world offset {tuple(offset)}",
-                )
+        positions, offset, too_far = in_shared_frame(cloud.positions, cloud.world_offset,
+                                                     scan_object.frame_offset(context.scene))
+        if too_far:
+            self.report(
+                {"WARNING"},
+                f"{os.path.basename(paths[0])}: far from the other scans' frame; "
+                f"it keeps its own world offset {tuple(offset)}",
+            )
         colors = cloud.colors
         scans = cloud.scans
         scan_index = cloud.scan_index if self.separate_objects and len(paths) > 1 else None
-        groups = (
-            [(paths, np.arange(len(positions)), [s["scanner"] for s in scans])]
-            if scan_index is None
-            else [([p], np.flatnonzero(scan_index == i), [scans[i]["scanner"]]) for i, p in enumerate(paths)]
-        )
+        groups = object_groups(paths, scans, len(positions), scan_index)
         created = []
         for group_paths, members, scanners in groups:
             created.append(
@@ -142,12 +119,7 @@ class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator
         return {"FINISHED"}
 
     def _make_object(self, collection, paths, members, positions, colors, scanners, cloud, offset):
-        own = positions[members]
-        bounds = (tuple(map(float, own.min(axis=0))), tuple(map(float, own.max(axis=0))))
-        subset = scan_object.display_indices(len(members), self.display_limit)
-        if subset is not None:
-            members = members[subset]
-        shown = positions[members]
+        bounds, shown, shown_colors = object_points(positions, colors, members, self.display_limit)
         radius = self.point_radius or automatic_point_radius(*bounds, len(shown))
         # Scanners are in the cloud's own frame; the object's frame may be the scene's.
         cloud_offset = cloud.world_offset
@@ -155,8 +127,8 @@ class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator
         return scan_object.build_scan_object(
             name,
             shown,
-            None if colors is None else colors[members],
-            point_count=len(own),
+            shown_colors,
+            point_count=len(members),
             source_paths=paths,
             world_offset=offset,
             scanners=[_world_scanner(s, cloud_offset) for s in scanners],

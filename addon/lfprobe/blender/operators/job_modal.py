@@ -10,8 +10,8 @@ import threading
 
 import bpy
 
-from ..core import native
-from ..core.progress import TerminalProgress
+from ...core import native
+from ...core.progress import TerminalProgress
 
 POLL_SECONDS = 0.1
 

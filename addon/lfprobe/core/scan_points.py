@@ -1,0 +1,67 @@
+"""The arithmetic of showing a loaded scan cloud in Blender, without Blender: which points the
+viewport shows, how large they are drawn, whether a cloud can share the scene's frame, and
+which points go into which object (the add-on's scan import and scan objects call these)."""
+
+from __future__ import annotations
+
+from typing import List, Optional, Sequence, Tuple
+
+import numpy as np
+
+DISPLAY_SEED = 20240601  # fixed: the same file always shows the same subsample
+# Clouds further than this from the scene's frame keep their own world offset: float32
+# positions (Blender's) hold about 1 mm at 10 km.
+SHARED_FRAME_LIMIT = 10_000.0
+
+
+def display_indices(point_count: int, limit: int) -> np.ndarray | None:
+    """The points shown in the viewport: all of them up to `limit`, else a deterministic
+    random subset (a stride would alias with the scanner's row/column pattern), in file order."""
+    if limit <= 0 or point_count <= limit:
+        return None
+    rng = np.random.default_rng(DISPLAY_SEED)
+    chosen = rng.choice(point_count, size=limit, replace=False)
+    chosen.sort()
+    return chosen
+
+
+def automatic_point_radius(bounds_min, bounds_max, displayed: int) -> float:
+    """Half the mean point spacing, taking the points to lie on the box's faces (a room)."""
+    size = np.maximum(np.asarray(bounds_max, float) - np.asarray(bounds_min, float), 1e-6)
+    area = 2.0 * (size[0] * size[1] + size[1] * size[2] + size[2] * size[0])
+    return float(0.5 * np.sqrt(area / max(displayed, 1)))
+
+
+def in_shared_frame(positions: np.ndarray, world_offset: Sequence[float],
+                    frame: Optional[Sequence[float]]) -> Tuple[np.ndarray, np.ndarray, bool]:
+    """(positions, world offset, too_far) of a cloud moved into the scene's frame (world =
+    frame + position) when it is close enough, so that scans line up in Blender; a cloud too
+    far away, or a scene without a frame, keeps its own offset (too_far says which)."""
+    offset = np.array(world_offset, dtype=float)
+    if frame is None or not np.any(np.asarray(frame) != offset):
+        return positions, offset, False
+    shift = offset - np.asarray(frame)
+    if np.abs(shift).max() + np.abs(positions).max() < SHARED_FRAME_LIMIT:
+        return (positions.astype(np.float64) + shift).astype(np.float32), np.asarray(frame, dtype=float), False
+    return positions, offset, True
+
+
+def object_groups(paths: Sequence[str], scans: Sequence[dict], point_count: int,
+                  scan_index: Optional[np.ndarray]) -> List[tuple]:
+    """(paths, point indices, scanner positions) of each object to make: one for the merged
+    cloud (scan_index None), else one per scan file."""
+    if scan_index is None:
+        return [(list(paths), np.arange(point_count), [s["scanner"] for s in scans])]
+    return [([p], np.flatnonzero(scan_index == i), [scans[i]["scanner"]]) for i, p in enumerate(paths)]
+
+
+def object_points(positions: np.ndarray, colors: Optional[np.ndarray], members: np.ndarray,
+                  display_limit: int) -> tuple:
+    """(bounds (min, max), displayed positions, displayed colours or None) of one object's
+    points: the bounds of all its members, the display subset of them (display_indices)."""
+    own = positions[members]
+    bounds = (tuple(map(float, own.min(axis=0))), tuple(map(float, own.max(axis=0))))
+    subset = display_indices(len(members), display_limit)
+    if subset is not None:
+        members = members[subset]
+    return bounds, positions[members], None if colors is None else colors[members]
