@@ -37,17 +37,6 @@ json coverage_json(const ProbeCoverage& c) {
 }
 
 // Temporary files (NAME.tmp.PID.N) of a bake that was killed before it could rename them.
-void remove_stale_temporaries(const std::string& folder) {
-    std::error_code ec;
-    for (const auto& entry : fs::directory_iterator(folder, ec)) {
-        const std::string name = entry.path().filename().string();
-        const bool ours = name.rfind("probe_", 0) == 0 || name.rfind(kManifestName, 0) == 0;
-        if (ours && name.find(".tmp.") != std::string::npos) {
-            fs::remove(entry.path(), ec);
-        }
-    }
-}
-
 double seconds_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -203,6 +192,77 @@ ProbeSetManifest set_probe_set_storage(const std::string& folder, const ProbeSto
     return manifest;
 }
 
+namespace {
+
+BakeSummary write_probe_files(const std::string& folder, ProbeSetManifest manifest,
+                              const std::function<ProbeMap(std::size_t)>& bake_one,
+                              Progress* progress);
+
+// The folder as a path without a trailing separator ("out/set/" names "out/set").
+fs::path set_folder_path(const std::string& folder) {
+    fs::path p = fs::path(folder).lexically_normal();
+    if (!p.has_filename() && p.has_parent_path()) {
+        p = p.parent_path();
+    }
+    return p;
+}
+
+fs::path sibling(const fs::path& folder, const std::string& suffix) {
+    return folder.parent_path() / (folder.filename().string() + suffix);
+}
+
+// A probe set's own files: its manifest, its probes and their temporaries.
+bool is_probe_set_file(const std::string& name) {
+    return name.rfind("probe_", 0) == 0 || name.rfind(kManifestName, 0) == 0;
+}
+
+// A bake replaces `folder` as a whole, so it must hold nothing but an earlier set's files.
+void check_replaceable(const fs::path& folder) {
+    std::error_code ec;
+    if (!fs::exists(folder, ec)) {
+        return;
+    }
+    if (!fs::is_directory(folder, ec)) {
+        throw InputError(folder.string() + ": exists and is not a folder; a probe set is a folder");
+    }
+    for (const auto& entry : fs::directory_iterator(folder, ec)) {
+        const std::string name = entry.path().filename().string();
+        if (!entry.is_regular_file(ec) || !is_probe_set_file(name)) {
+            throw InputError(folder.string() + ": holds \"" + name +
+                             "\", which is not a probe set's file; bake into an empty folder or "
+                             "over an earlier probe set");
+        }
+    }
+}
+
+// Puts the complete set in `staging` where `target` is: the earlier set moves aside first and
+// goes only once the new one is in place.
+void swap_in(const fs::path& staging, const fs::path& target) {
+    std::error_code ec;
+    const fs::path previous = sibling(target, ".previous");
+    fs::remove_all(previous, ec);
+    const bool had_one = fs::exists(target, ec);
+    if (had_one) {
+        fs::rename(target, previous, ec);
+        if (ec) {
+            throw IoError(target.string() + ": cannot move the earlier probe set aside (" +
+                          ec.message() + ")");
+        }
+    }
+    fs::rename(staging, target, ec);
+    if (ec) {
+        if (had_one) {
+            std::error_code back;
+            fs::rename(previous, target, back);
+        }
+        throw IoError(target.string() + ": cannot put the new probe set in place (" + ec.message() +
+                      ")");
+    }
+    fs::remove_all(previous, ec);
+}
+
+} // namespace
+
 BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest,
                             const std::function<ProbeMap(std::size_t)>& bake_one,
                             Progress* progress) {
@@ -210,16 +270,36 @@ BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest
     if (positions.empty()) {
         throw InputError("bake: no probe positions given");
     }
+    // The set is written into a staging folder beside `folder` and swapped in when complete:
+    // an interrupted bake (cancel, a kill, a full disk) leaves the previous set as it was.
+    const fs::path target = set_folder_path(folder);
+    check_replaceable(target);
+    const fs::path staging = sibling(target, ".partial");
     std::error_code ec;
-    fs::create_directories(folder, ec);
+    fs::remove_all(staging, ec); // what a killed bake left
+    fs::create_directories(staging, ec);
     if (ec) {
-        throw IoError(folder + ": cannot create the probe set folder (" + ec.message() + ")");
+        throw IoError(staging.string() + ": cannot create the probe set's staging folder (" +
+                      ec.message() + ")");
     }
-    // Files of an earlier set in this folder would be mixed with the new ones: the manifest
-    // goes first, and comes back only once every probe is written. Temporary files that a
-    // killed bake left behind go too.
-    fs::remove(fs::path(folder) / kManifestName, ec);
-    remove_stale_temporaries(folder);
+    try {
+        BakeSummary summary =
+            write_probe_files(staging.string(), std::move(manifest), bake_one, progress);
+        swap_in(staging, target);
+        summary.folder = folder;
+        return summary;
+    } catch (...) {
+        fs::remove_all(staging, ec);
+        throw;
+    }
+}
+
+namespace {
+
+BakeSummary write_probe_files(const std::string& folder, ProbeSetManifest manifest,
+                              const std::function<ProbeMap(std::size_t)>& bake_one,
+                              Progress* progress) {
+    const std::vector<glm::dvec3>& positions = manifest.placement.positions;
     BakeSummary summary;
     summary.folder = folder;
     manifest.probes.clear();
@@ -260,6 +340,8 @@ BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest
     summary.mean_coverage.unknown /= count;
     return summary;
 }
+
+} // namespace
 
 json splat_settings_json(const BakeSettings& settings) {
     return json{{"splat_scale", settings.splat_scale},

@@ -105,30 +105,36 @@ def test_bad_scan_gives_a_clear_error_and_no_probe_set(tmp_path):
     assert not_a_set.returncode == 2 and "manifest" in not_a_set.stderr
 
 
-def test_killed_bake_leaves_no_partial_probe(native, tmp_path):
-    """SIGKILL in the middle of a bake: every probe file present is complete, there is no
-    manifest, and the next bake in the folder clears the leftovers."""
+def test_killed_rebake_leaves_the_earlier_set_as_it_was(native, tmp_path):
+    """SIGKILL in the middle of a bake over an earlier set: the earlier set is untouched (the new
+    one is staged in SET.partial and swapped in only when complete), the staging folder holds
+    only complete probe files, and the next bake clears it."""
     scan = tmp_path / "room.xyz"
     g = np.arange(-2, 2, 0.02)
     yy, zz = np.meshgrid(g, g)
     wall = np.column_stack([np.full(yy.size, 3.0), yy.ravel(), zz.ravel() + 1])
     np.savetxt(scan, np.column_stack([wall, np.full((yy.size, 3), 128)]), fmt="%.3f")
     out = tmp_path / "set"
+    run_cli("bake", "--scan", scan, "--probe", 0, 0, 1, 0.5, 0, 1, "--res", 16, "--out", out,
+            "--no-cache", "--quiet", check=True)
+    earlier = {p.name: p.read_bytes() for p in out.iterdir()}
+    staging = tmp_path / "set.partial"
     probes = [v for i in range(60) for v in (0.01 * i, 0, 1)]
     process = subprocess.Popen(
         [os.path.join(ROOT, "lfprobe"), "bake", "--scan", str(scan), "--probe", *map(str, probes),
          "--res", "512", "--out", str(out), "--no-cache", "--quiet"],
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 120
-    while not (out / "probe_00002.exr").exists() and time.time() < deadline:
+    while not (staging / "probe_00002.exr").exists() and time.time() < deadline:
         time.sleep(0.01)
     process.send_signal(signal.SIGKILL)
     process.wait()
-    assert not (out / "manifest.json").exists()
-    complete = sorted(out.glob("probe_?????.exr"))
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == earlier
+    complete = sorted(staging.glob("probe_?????.exr"))
     assert complete, "the bake should have written some probes before the kill"
     for path in complete:
         assert native.read_probe(str(path))["resolution"] == 512
     run_cli("bake", "--scan", scan, "--probe", 0, 0, 1, "--res", 16, "--out", out, "--no-cache",
             "--quiet", check=True)
-    assert not list(out.glob("*.tmp.*"))
+    assert not staging.exists()
+    assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "probe_00000.exr"]

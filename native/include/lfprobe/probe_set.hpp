@@ -70,10 +70,13 @@ struct BakeSummary {
     std::size_t bytes_on_disk = 0;
 };
 
-// The write path every bake shares: creates `folder`, removes an earlier manifest and the
-// temporaries of a killed bake, then bakes probe i with `bake_one(i)` and writes it atomically,
-// one probe at a time, and writes `manifest` (with the probe records added) last. Fills the
-// bake, write, coverage and byte figures of the returned summary.
+// The write path every bake shares: bakes probe i with `bake_one(i)` and writes it, one probe at
+// a time, then `manifest` (with the probe records added), all into the staging folder
+// `folder`.partial beside `folder`, and swaps the complete set in (an earlier set moves to
+// `folder`.previous, then goes). A cancelled or failed bake removes the staging folder and
+// leaves an earlier set in `folder` exactly as it was. InputError when `folder` holds anything
+// but an earlier set's files. Fills the bake, write, coverage and byte figures of the returned
+// summary.
 [[nodiscard]] BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest,
                                           const std::function<ProbeMap(std::size_t)>& bake_one,
                                           Progress* progress = nullptr);
