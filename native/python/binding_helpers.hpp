@@ -14,6 +14,7 @@
 
 #include "lfprobe/camera.hpp"
 #include "lfprobe/error.hpp"
+#include "lfprobe/json_input.hpp"
 #include "lfprobe/probe_map.hpp"
 #include "lfprobe/probe_placement.hpp"
 #include "lfprobe/probe_set.hpp"
@@ -37,7 +38,7 @@ inline Camera camera_from(const std::string& camera) {
     const auto first = camera.find_first_not_of(" \t\r\n");
     if (first != std::string::npos && camera[first] == '{') {
         try {
-            return Camera::from_json(nlohmann::json::parse(camera), "camera JSON");
+            return Camera::from_json(parse_json(camera, "camera JSON"), "camera JSON");
         } catch (const nlohmann::json::exception& e) {
             throw InputError(std::string("camera JSON: ") + e.what());
         }
@@ -91,7 +92,7 @@ inline ProbePlacement placement_from(const std::vector<std::vector<double>>& pos
 // The manifest's "sources" from the JSON text Python passes.
 inline nlohmann::json sources_from(const std::string& sources_json) {
     try {
-        return nlohmann::json::parse(sources_json);
+        return parse_json(sources_json, "sources");
     } catch (const nlohmann::json::exception& e) {
         throw InputError(std::string("bake: sources_json is not valid JSON (") + e.what() + ")");
     }
@@ -110,7 +111,7 @@ inline std::optional<ProbeStorage> storage_from(const pybind11::object& storage,
     if (pybind11::isinstance<pybind11::dict>(storage)) {
         const std::string text =
             pybind11::module_::import("json").attr("dumps")(storage).cast<std::string>();
-        return ProbeStorage::from_json(nlohmann::json::parse(text), "storage");
+        return ProbeStorage::from_json(parse_json(text, "storage"), "storage");
     }
     throw InputError("storage: expected None, \"full\", \"compact\" or a dict");
 }

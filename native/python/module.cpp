@@ -229,17 +229,25 @@ PYBIND11_MODULE(_native, m) {
     static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
     static py::exception<IoError> io_error(m, "NativeIOError", PyExc_OSError);
     static py::exception<Cancelled> cancelled(m, "Cancelled", PyExc_Exception);
+    // Messages quote what the input held, which need not be UTF-8 (a camera file's bytes):
+    // such bytes come through as \xNN escapes instead of losing the whole message.
     py::register_exception_translator([](std::exception_ptr p) {
+        const auto raise = [](const py::handle type, const char* what) {
+            PyObject* message = PyUnicode_DecodeUTF8(
+                what, static_cast<Py_ssize_t>(std::strlen(what)), "backslashreplace");
+            PyErr_SetObject(type.ptr(), message);
+            Py_XDECREF(message);
+        };
         try {
             if (p) {
                 std::rethrow_exception(p);
             }
         } catch (const InputError& e) {
-            input_error(e.what());
+            raise(input_error, e.what());
         } catch (const IoError& e) {
-            io_error(e.what());
+            raise(io_error, e.what());
         } catch (const Cancelled& e) {
-            cancelled(e.what());
+            raise(cancelled, e.what());
         }
     });
 

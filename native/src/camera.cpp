@@ -27,6 +27,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/json_input.hpp"
 
 namespace lfprobe {
 
@@ -474,7 +475,7 @@ Camera read_camera_json(const std::string& path) {
     }
     json j;
     try {
-        j = json::parse(in);
+        j = parse_json(in, path);
     } catch (const json::exception& e) {
         throw InputError(path + ": not valid camera JSON (" + e.what() + ")");
     }

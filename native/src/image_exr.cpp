@@ -1,5 +1,6 @@
 #include "lfprobe/image_exr.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <limits>
 
@@ -163,13 +164,28 @@ RenderedImage read_rendered_exr(const std::string& path, std::string* metadata) 
         }
         file.setFrameBuffer(frame_buffer(image, planes));
         file.readPixels(0, h - 1);
+        // The integer channels are floats in the file: a value that is no whole number in
+        // range (NaN, 1e30) would be undefined behaviour to convert.
+        const auto whole = [&](float v, double lo, double hi, const char* channel) {
+            if (!(v >= lo && v <= hi) || v != std::floor(v)) {
+                throw InputError(path + ": channel '" + channel + "' holds " + std::to_string(v) +
+                                 "; expected whole numbers from " + std::to_string(lo) + " to " +
+                                 std::to_string(hi));
+            }
+            return v;
+        };
+        constexpr double kIndexMax = 2147483647.0;
         for (std::size_t i = 0; i < image.pixel_count(); ++i) {
-            image.status[i] = static_cast<std::uint8_t>(planes.status[i]);
-            image.probe[i] = static_cast<std::int32_t>(planes.probe[i]);
-            image.steps[i] = static_cast<std::uint32_t>(planes.steps[i]);
+            image.status[i] =
+                static_cast<std::uint8_t>(whole(planes.status[i], 0.0, 2.0, "status"));
+            image.probe[i] =
+                static_cast<std::int32_t>(whole(planes.probe[i], -1.0, kIndexMax, "probe"));
+            image.steps[i] =
+                static_cast<std::uint32_t>(whole(planes.steps[i], 0.0, 4294967295.0, "steps"));
         }
         for (const float o : planes.object) {
-            image.object.push_back(static_cast<std::int32_t>(o));
+            image.object.push_back(
+                static_cast<std::int32_t>(whole(o, -1.0, kIndexMax, kObjectChannel)));
         }
         return image;
     } catch (const InputError&) {

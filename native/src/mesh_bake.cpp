@@ -19,8 +19,9 @@ namespace lfprobe {
 namespace {
 
 void check_settings(const MeshBakeSettings& s) {
-    if (s.resolution < 1 || s.resolution > 16384) {
-        throw InputError("mesh bake: resolution must be in [1, 16384], got " +
+    if (s.resolution < 1 || s.resolution > kMaxProbeResolution) {
+        throw InputError("mesh bake: resolution must be in [1, " +
+                         std::to_string(kMaxProbeResolution) + "], got " +
                          std::to_string(s.resolution));
     }
     if (s.supersample < 1 || s.supersample > 16) {

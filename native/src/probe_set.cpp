@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/json_input.hpp"
 #include "lfprobe/probe_exr.hpp"
 
 namespace lfprobe {
@@ -106,7 +107,14 @@ ProbeSetManifest ProbeSetManifest::from_json(const json& j, const std::string& w
             throw InputError(where + ": probe file '" + r.file + "' must be a plain file name");
         }
         r.position = vec_from(p.at("position"), "position", where);
-        r.resolution = p.at("resolution").get<int>();
+        const json& resolution = p.at("resolution");
+        if (!resolution.is_number_integer() || resolution.get<std::int64_t>() < 1 ||
+            resolution.get<std::int64_t>() > kMaxProbeResolution) {
+            throw InputError(where + ": probe '" + r.file + "' has resolution " +
+                             resolution.dump() + "; expected a whole number from 1 to " +
+                             std::to_string(kMaxProbeResolution));
+        }
+        r.resolution = resolution.get<int>();
         if (p.contains("coverage")) {
             const json& c = p["coverage"];
             r.coverage = ProbeCoverage{c.value("surface", 0.0), c.value("inferred", 0.0),
@@ -121,7 +129,22 @@ ProbeSetManifest ProbeSetManifest::from_json(const json& j, const std::string& w
         ProbeGrid grid;
         grid.origin = vec_from(g.at("origin"), "grid.origin", where);
         grid.spacing = vec_from(g.at("spacing"), "grid.spacing", where);
-        grid.counts = g.at("counts").get<std::array<int, 3>>();
+        const json& counts = g.at("counts");
+        std::uint64_t product = 1;
+        for (std::size_t a = 0; a < 3; ++a) {
+            const json& c = counts.at(a);
+            if (!c.is_number_integer() || c.get<std::int64_t>() < 1 ||
+                c.get<std::int64_t>() > static_cast<std::int64_t>(m.probes.size())) {
+                throw InputError(where + ": grid.counts " + counts.dump() + " do not fit the " +
+                                 std::to_string(m.probes.size()) + " probes listed");
+            }
+            grid.counts[a] = c.get<int>();
+            product *= static_cast<std::uint64_t>(grid.counts[a]);
+        }
+        if (product != m.probes.size()) {
+            throw InputError(where + ": grid counts give " + std::to_string(product) +
+                             " probes but " + std::to_string(m.probes.size()) + " are listed");
+        }
         m.placement = ProbePlacement::from_grid(grid);
         if (m.placement.positions.size() != m.probes.size()) {
             throw InputError(where + ": grid counts give " +
@@ -147,7 +170,7 @@ ProbeSetManifest read_manifest(const std::string& folder) {
     }
     json j;
     try {
-        j = json::parse(in);
+        j = parse_json(in, path);
     } catch (const json::exception& e) {
         throw InputError(path + ": invalid JSON (" + e.what() + ")");
     }

@@ -169,6 +169,37 @@ TEST(ProbeSet, ABakeIntoAFolderOfOtherFilesIsRefusedAndTheFilesStay) {
     EXPECT_FALSE(fs::exists(dir / kManifestName));
 }
 
+TEST(ProbeSet, ManifestValuesThatWouldSizeAnAllocationAreRefused) {
+    const fs::path dir = fresh_dir("hostile_manifest");
+    const std::string probe =
+        R"({"file": "probe_00000.exr", "position": [0, 0, 0], "resolution": 64})";
+    const auto manifest = [&](const std::string& probes, const std::string& extra) {
+        std::ofstream(dir / kManifestName)
+            << R"({"format": "lfprobe-probe-set", "format_version": 1, "world_offset": [0, 0, 0],)"
+            << R"("probes": [)" << probes << "]" << extra << "}";
+    };
+    const auto refused = [&](const std::string& what) {
+        try {
+            (void)read_manifest(dir.string());
+            ADD_FAILURE() << "accepted: " << what;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("manifest.json"), std::string::npos) << what;
+        }
+    };
+    manifest(probe, R"(, "layout": "grid", "grid": {"origin": [0, 0, 0], "spacing": [1, 1, 1],)"
+                    R"( "counts": [100000, 100000, 100000]}})");
+    refused("grid counts far beyond the probes listed");
+    manifest(probe, R"(, "layout": "grid", "grid": {"origin": [0, 0, 0], "spacing": [1, 1, 1],)"
+                    R"( "counts": [2147483648, 1, 1]}})");
+    refused("a count beyond int");
+    manifest(R"({"file": "probe_00000.exr", "position": [0, 0, 0], "resolution": 1e10})", "");
+    refused("a resolution of 1e10");
+    manifest(R"({"file": "probe_00000.exr", "position": [0, 0, 0], "resolution": 0})", "");
+    refused("a resolution of 0");
+    manifest(probe, R"(, "bake": )" + std::string(200000, '[') + std::string(200000, ']'));
+    refused("JSON nested 200,000 deep");
+}
+
 TEST(ProbeSet, ManifestErrorsNameTheFile) {
     const fs::path dir = fresh_dir("bad_manifest");
     {

@@ -102,3 +102,23 @@ def test_render_errors_are_clear(room, tmp_path):
     assert not (tmp_path / "x.exr").exists()
     missing = run_cli("render", "--probes", tmp_path, "--camera", room["camera"], "--out", tmp_path / "y.exr")
     assert missing.returncode != 0 and "manifest" in missing.stderr
+
+
+def test_hostile_cameras_are_clear_errors(room, tmp_path):
+    """A camera whose keys are each valid but whose rays are not finite, and a camera file with
+    bytes that are not UTF-8: exit 2 with a message (the second quoting the bytes), no crash."""
+    tiny_lens = json.loads(room["camera"].read_text())
+    tiny_lens["lens"] = 1e-300
+    path = tmp_path / "tiny_lens.json"
+    path.write_text(json.dumps(tiny_lens))
+    for mode in ("grid", "nearest"):
+        result = run_cli("render", "--probes", room["probes"], "--camera", path, "--mode", mode,
+                         "--out", tmp_path / "x.exr", "--quiet")
+        assert result.returncode == 2, result.stderr
+        assert "rays are not finite" in result.stderr
+    bad_bytes = tmp_path / "bad_bytes.json"
+    bad_bytes.write_bytes(b'{"type": "PERSP", "lens": "\xff\xfe"}')
+    result = run_cli("render", "--probes", room["probes"], "--camera", bad_bytes,
+                     "--out", tmp_path / "y.exr", "--quiet")
+    assert result.returncode == 2
+    assert "bad_bytes.json" in result.stderr and "\\xff" in result.stderr

@@ -17,6 +17,10 @@
 
 namespace lfprobe {
 
+// The largest map side any bake writes or any reader accepts (16384² texels: 4.5 GiB at full
+// storage), so that a resolution read from a file cannot size an allocation beyond it.
+inline constexpr int kMaxProbeResolution = 16384;
+
 struct ProbeMap {
     int resolution = 0;
     glm::dvec3 position{0.0}; // probe centre in the local (offset) frame
