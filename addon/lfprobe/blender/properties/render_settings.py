@@ -70,6 +70,9 @@ class LFProbeRenderSettings(bpy.types.PropertyGroup):
         items=(
             ("bilinear", "Bilinear", "Interpolate between the texels around a hit that lie on the same surface"),
             ("nearest", "Nearest", "The colour of the one texel the ray met (the paper's lookup)"),
+            ("footprint", "Footprint",
+             "As bilinear, and where a pixel spans several texels, the probe's prefiltered radiance at the "
+             "pixel's width: anti-aliases one ray per pixel, as texture LOD does"),
         ),
         default="bilinear",
         update=_redraw_viewports,

@@ -151,9 +151,12 @@ def add_fidelity_arguments(parser) -> None:
                         help="samples per pixel: 1 (default) or a square (4, 9, 16, ...), the ground "
                              "truth's stratified pattern; colour and coverage are averaged, depth, status, "
                              "probe from the pixel centre, steps summed over the pixel's rays")
-    parser.add_argument("--filter", choices=["nearest", "bilinear"], default=None,
+    parser.add_argument("--filter", choices=["nearest", "bilinear", "footprint"], default=None,
                         help="a HIT's colour: its texel (nearest) or interpolated between the texels "
-                             "around it on the same surface (bilinear, default)")
+                             "around it on the same surface (bilinear, default); footprint: as "
+                             "bilinear, and where a sample spans more than a texel, the probe's "
+                             "prefiltered radiance at the sample's width (one ray per pixel "
+                             "anti-aliased, as texture LOD does)")
     parser.add_argument("--blend", type=int, default=None, metavar="N",
                         help="probes a HIT's colour is blended from, weighted by how finely each sees the "
                              "point (1: the first probe that answers, as the paper; default 4; at most 8)")

@@ -135,6 +135,9 @@ def render_page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
                                       ("psnr_vs_converged_gt", "PSNR dB vs converged", num(".2f")),
                                       ("gt_psnr_vs_converged_gt", "gt itself vs converged", num(".2f")),
                                       ("psnr_one_sample_per_pixel", "PSNR dB (1 spp)", num(".2f")),
+                                      ("psnr_one_sample_vs_filtered_gt", "PSNR dB (1 spp vs filtered GT)", num(".2f")),
+                                      ("psnr_footprint_one_sample_vs_filtered_gt",
+                                       "PSNR dB (1 spp footprint vs filtered GT)", num(".2f")),
                                       ("ssim", "SSIM", num(".4f")), ("flip", "FLIP", num(".4f")),
                                       ("hole_rate", "holes", num(".2%")), ("ms_per_frame", "ms/frame", num(".2f")),
                                       ("bake_seconds", "bake s", num(".2f"))]))

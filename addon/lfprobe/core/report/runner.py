@@ -131,7 +131,10 @@ def _findings(data: Dict[str, object], reference: Optional[Dict[str, object]]) -
                 f"({top['reference_spp']} samples) {top['psnr_vs_converged_gt']:.2f} dB at {top['resolution']}², "
                 f"where the {top['spp']}-sample ground truth itself scores {gt_noise:.2f} dB: what limits the error "
                 f"there is {limit}. One sample per pixel on both sides gives "
-                f"{top['psnr_one_sample_per_pixel']:.2f} dB: aliasing, not the probe.")
+                f"{top['psnr_one_sample_per_pixel']:.2f} dB: aliasing, not the probe. One sample per pixel against "
+                f"the {top['spp']}-sample ground truth: {top['psnr_one_sample_vs_filtered_gt']:.2f} dB bilinear, "
+                f"{top['psnr_footprint_one_sample_vs_filtered_gt']:.2f} dB with the footprint filter (the probe's "
+                f"prefiltered radiance at the pixel's width).")
     groups: Dict[tuple, List[Dict[str, object]]] = {}
     for r in data["distance"]:
         groups.setdefault((r["source"], r["view"]), []).append(r)

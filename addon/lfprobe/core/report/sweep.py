@@ -363,6 +363,11 @@ class Sweep:
                 converged, _ = ctx.ground_truth(camera, spp=reference_spp)
                 w = camera["resolution"][0]
                 fov = 2.0 * math.atan(0.5 * camera["sensor_width"] / camera["lens"])
+                # One ray per pixel anti-aliased by the footprint filter, against the filtered
+                # ground truth: what the viewport can show without more rays.
+                footprint_image, _ = ctx.render_probes(field, camera, {**DEFAULT_TRACE[1], "filter": "footprint"},
+                                                       spp=1, repeats=1)
+                footprint_psnr = psnr_only(gt, footprint_image)
                 for radiance_filter in ("nearest", "bilinear"):
                     trace = {**DEFAULT_TRACE[1], "filter": radiance_filter}
                     image, stats = ctx.render_probes(field, camera, trace)
@@ -377,6 +382,8 @@ class Sweep:
                         "psnr_vs_converged_gt": psnr_only(converged, image),
                         "gt_psnr_vs_converged_gt": psnr_only(converged, gt),
                         "psnr_one_sample_per_pixel": psnr_only(gt_centre, centre_image),
+                        "psnr_one_sample_vs_filtered_gt": psnr_only(gt, centre_image),
+                        "psnr_footprint_one_sample_vs_filtered_gt": footprint_psnr,
                         "depth_absrel": figures["depth_absrel"], "hole_rate": figures["hole_rate"],
                         "bake_seconds": summary["bake_seconds"], "bake_wall_seconds": bake_wall,
                         "texels_per_ray": stats["mean_steps"], **timing(stats, pixel_count(camera)),
