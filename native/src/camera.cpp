@@ -211,6 +211,11 @@ Camera Camera::from_json(const json& j, const std::string& where) {
         }
         c.width = r[0].get<int>();
         c.height = r[1].get<int>();
+        // An image holds 41 bytes a pixel in memory: the bound keeps one under 3 GB.
+        if (static_cast<long long>(c.width) * c.height > kMaxCameraPixels) {
+            bad_key(where, "resolution",
+                    "at most " + std::to_string(kMaxCameraPixels) + " pixels (8192 × 8192)", r);
+        }
     }
     c.lens = read_positive(j, "lens", c.lens, where);
     c.sensor_width = read_positive(j, "sensor_width", c.sensor_width, where);

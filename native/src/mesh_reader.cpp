@@ -49,7 +49,24 @@ std::optional<long long> parse_int(std::string_view s) {
     return value;
 }
 
-std::string read_text(const std::string& path, const char* what) {
+// Reads a whole text file that must be a regular file (a FIFO would block, /dev/zero never
+// end) of at most `max_bytes`.
+// A material library is a few kilobytes; an OBJ of tens of millions of triangles is a few GB.
+constexpr std::uintmax_t kMaxMaterialLibraryBytes = std::uintmax_t{64} << 20;
+constexpr std::uintmax_t kMaxObjBytes = std::uintmax_t{8} << 30;
+
+std::string read_text(const std::string& path, const char* what, std::uintmax_t max_bytes) {
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(path, ec)) {
+        throw IoError(
+            path + ": cannot open " + what +
+            (std::filesystem::exists(path, ec) ? " (not a regular file)" : " (no such file)"));
+    }
+    const std::uintmax_t size = std::filesystem::file_size(path, ec);
+    if (!ec && size > max_bytes) {
+        throw InputError(path + ": the " + what + " is " + std::to_string(size) +
+                         " bytes, more than the " + std::to_string(max_bytes) + " accepted");
+    }
     std::ifstream in(path, std::ios::binary);
     if (!in) {
         throw IoError(path + ": cannot open " + what);
@@ -106,7 +123,7 @@ glm::vec3 read_vec3(const std::vector<std::string_view>& tokens, std::size_t fir
 void read_mtl(const std::string& path, std::vector<Material>& materials,
               std::map<std::string, std::uint32_t>& by_name,
               std::map<std::string, std::shared_ptr<const Texture>>& textures) {
-    const std::string text = read_text(path, "material library (mtllib)");
+    const std::string text = read_text(path, "material library (mtllib)", kMaxMaterialLibraryBytes);
     const fs::path folder = fs::path(path).parent_path();
     Material* current = nullptr;
     for_each_line(text, [&](std::uint64_t line, const std::vector<std::string_view>& t) {
@@ -187,7 +204,7 @@ std::int64_t resolve_index(std::string_view token, std::size_t count, const File
 } // namespace
 
 Mesh read_obj(const std::string& path) {
-    const std::string text = read_text(path, "OBJ mesh");
+    const std::string text = read_text(path, "OBJ mesh", kMaxObjBytes);
     const fs::path folder = fs::path(path).parent_path();
     Mesh mesh;
     mesh.path = path;

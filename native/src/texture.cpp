@@ -12,12 +12,24 @@
 namespace lfprobe {
 
 Texture Texture::load(const std::string& path) {
-    if (!std::filesystem::exists(path)) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) {
         throw IoError(path + ": texture file not found");
+    }
+    if (!std::filesystem::is_regular_file(path, ec)) {
+        throw IoError(path + ": cannot open the texture (not a regular file)");
     }
     int w = 0;
     int h = 0;
     int channels = 0;
+    // The size from the header before any pixel is decoded: a small PNG can declare 16384²
+    // pixels, 3 GB once decoded to linear floats.
+    if (stbi_info(path.c_str(), &w, &h, &channels) != 0 &&
+        static_cast<long long>(w) * h > kMaxTexturePixels) {
+        throw InputError(path + ": the texture is " + std::to_string(w) + " × " +
+                         std::to_string(h) + " pixels, more than the " +
+                         std::to_string(kMaxTexturePixels) + " (8192 × 8192) accepted");
+    }
     // Always ask for 3 channels: only the base colour is used, alpha is ignored.
     std::unique_ptr<stbi_uc, void (*)(void*)> pixels(stbi_load(path.c_str(), &w, &h, &channels, 3),
                                                      stbi_image_free);

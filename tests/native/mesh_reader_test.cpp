@@ -7,10 +7,12 @@
 #include <string>
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include "lfprobe/color.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/mesh_reader.hpp"
+#include "lfprobe/texture.hpp"
 #include "test_data.hpp"
 
 namespace lfprobe {
@@ -145,6 +147,38 @@ TEST(MeshReader, MeshNearOriginHasNoOffset) {
     const std::string path =
         temp_file("small.obj", "v -1000 0 0\nv 1000 0 0\nv 0 1 1023\nf 1 2 3\n");
     EXPECT_EQ(read_obj(path).world_offset, glm::dvec3(0.0));
+}
+
+TEST(MeshReader, FilesThatAreNotRegularOrTooLargeAreRefusedBeforeReading) {
+    // A material library naming /dev/zero (endless) or a FIFO (blocks forever).
+    const std::string fifo =
+        (std::filesystem::temp_directory_path() / "lfprobe_mesh_reader_test" / "lib.fifo").string();
+    std::filesystem::remove(fifo);
+    ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+    for (const std::string& library : {std::string("/dev/zero"), fifo}) {
+        const std::string obj = temp_file(
+            "special_mtllib.obj", "mtllib " + library + "\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
+        try {
+            (void)read_mesh(obj);
+            ADD_FAILURE() << "read a material library from " << library;
+        } catch (const IoError& e) {
+            EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos);
+        }
+    }
+    std::filesystem::remove(fifo);
+    // A PNG of a few bytes that declares 16384 × 16384 pixels (3 GB decoded): refused from its
+    // header, before any pixel is decoded.
+    std::string png("\x89PNG\r\n\x1a\n", 8);
+    const unsigned char ihdr[] = {0, 0,    0, 13, 'I', 'H', 'D', 'R', 0, 0, 0x40, 0, 0,
+                                  0, 0x40, 0, 8,  2,   0,   0,   0,   0, 0, 0,    0};
+    png.append(reinterpret_cast<const char*>(ihdr), sizeof ihdr);
+    const std::string huge = temp_file("huge.png", png);
+    try {
+        (void)Texture::load(huge);
+        ADD_FAILURE() << "loaded a 16384² texture";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("16384"), std::string::npos) << e.what();
+    }
 }
 
 TEST(MeshReader, NonFiniteVertexIsAnError) {

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+#include <unistd.h>
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/probe_exr.hpp"
@@ -198,6 +199,23 @@ TEST(ProbeSet, ManifestValuesThatWouldSizeAnAllocationAreRefused) {
     refused("a resolution of 0");
     manifest(probe, R"(, "bake": )" + std::string(200000, '[') + std::string(200000, ']'));
     refused("JSON nested 200,000 deep");
+}
+
+TEST(ProbeSet, AWriteRemovesTheTemporariesAKilledWriterLeft) {
+    const fs::path dir = fresh_dir("orphans");
+    const fs::path target = dir / "view.exr";
+    // 999999999: no such process (above any pid_max); this process's own temporary is in use.
+    const fs::path orphan = dir / "view.exr.tmp.999999999.0";
+    const fs::path in_use = dir / ("view.exr.tmp." + std::to_string(::getpid()) + ".99");
+    const fs::path other = dir / "other.exr.tmp.999999999.0";
+    for (const fs::path& p : {orphan, in_use, other}) {
+        std::ofstream(p) << "partial";
+    }
+    write_file_atomically(target.string(), "complete");
+    EXPECT_FALSE(fs::exists(orphan));
+    EXPECT_TRUE(fs::exists(in_use));
+    EXPECT_TRUE(fs::exists(other)); // another file's: its own next write clears it
+    EXPECT_TRUE(fs::exists(target));
 }
 
 TEST(ProbeSet, ManifestErrorsNameTheFile) {

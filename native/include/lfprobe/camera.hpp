@@ -26,6 +26,10 @@ enum class CameraType {
 
 enum class SensorFit { Auto, Horizontal, Vertical };
 
+// The most pixels a camera file may ask for (8192 × 8192): a rendered image takes 41 bytes a
+// pixel in memory.
+inline constexpr long long kMaxCameraPixels = 8192LL * 8192LL;
+
 struct Camera {
     // Defaults are Blender's (DNA_camera_defaults.h: lens 50, sensor 36 × 24, clip 0.1 / 1000,
     // latitude ±π/2, longitude ±π; render resolution 1920 × 1080, pixel aspect 1).

@@ -18,7 +18,8 @@ void write_probe_exr(const std::string& path, const ProbeMap& map);
 // readers never see a half-written file. Throws IoError.
 void write_file_atomically(const std::string& path, const std::string& bytes);
 
-// A temporary name beside `path` that no other writer in this or another process uses.
+// A temporary name beside `path` that no other writer in this or another process uses
+// (PATH.tmp.PID.N). Temporaries of `path` that a killed process left are removed first.
 [[nodiscard]] std::string temporary_path_for(const std::string& path);
 
 } // namespace lfprobe

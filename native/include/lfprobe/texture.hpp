@@ -11,6 +11,9 @@
 
 namespace lfprobe {
 
+// The largest texture accepted, in pixels (8192 × 8192: 805 MB as linear floats).
+inline constexpr long long kMaxTexturePixels = 8192LL * 8192LL;
+
 struct Texture {
     std::string path;
     int width = 0;
