@@ -86,17 +86,12 @@ GridWalk::GridWalk(const ProbeGrid& grid, const Ray& ray) : grid_(grid), ray_(ra
         return;
     }
     // The cell where the ray is inside the box, clamped at the faces.
-    const glm::dvec3 start = ray.at(t_enter);
+    cell_ = grid_cell_containing(grid, ray.at(t_enter));
     for (int a = 0; a < 3; ++a) {
-        const auto ua = static_cast<std::size_t>(a);
-        if (!bounded_[ua]) {
-            continue;
+        if (bounded_[static_cast<std::size_t>(a)]) {
+            step_[static_cast<std::size_t>(a)] =
+                ray.direction[a] > 0.0 ? 1 : (ray.direction[a] < 0.0 ? -1 : 0);
         }
-        const double f = std::floor((start[a] - grid.origin[a]) / grid.spacing[a]);
-        // NaN-safe: a start that is not a number (an infinite t_enter) goes to cell 0.
-        cell_[ua] = static_cast<int>(
-            std::isfinite(f) ? std::clamp(f, 0.0, static_cast<double>(cells_[ua] - 1)) : 0.0);
-        step_[ua] = ray.direction[a] > 0.0 ? 1 : (ray.direction[a] < 0.0 ? -1 : 0);
     }
     t_exit_ = t_exit;
     cell_enter_ = t_enter;

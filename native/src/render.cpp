@@ -13,6 +13,7 @@
 #include "lfprobe/image_exr.hpp"
 #include "lfprobe/image_metadata.hpp"
 #include "lfprobe/image_tiles.hpp"
+#include "lfprobe/probe_blend.hpp"
 #include "lfprobe/probe_lookup.hpp"
 #include "lfprobe/radiance_filter.hpp"
 
@@ -127,12 +128,9 @@ public:
                     // The eye probe alone: from its centre no other probe adds detail.
                     const auto probe = static_cast<std::size_t>(eye_.index);
                     const ProbeMap& map = field_.probe(probe);
-                    RadianceFootprint footprint;
-                    if (trace_.filter == RadianceFilter::Footprint) {
-                        footprint = {&field_.radiance_mips(probe),
-                                     footprint_in_texels(answers[k].t, trace_.sample_angle,
-                                                         answers[k].t, map.resolution)};
-                    }
+                    // From the probe's centre the eye and the probe are equally far.
+                    const RadianceFootprint footprint =
+                        footprint_of(field_, probe, answers[k].t, answers[k].t, trace_);
                     hits[k].radiance = filtered_radiance(
                         map, rays[k].direction, answers[k].texel,
                         surface_thickness(trace_.probe, answers[k].t, map.resolution),
