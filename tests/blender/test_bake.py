@@ -51,7 +51,7 @@ def test_bake_next_to_the_blend_with_coverage():
     folder = _saved_scene()
     scan, grid_obj, path = _box_room_grid()
     assert bpy.ops.object.lfprobe_bake() == {"FINISHED"}
-    probe_dir = os.path.join(folder, f"{grid_obj.name}_probes")
+    probe_dir = os.path.join(folder, f"scene_{grid_obj.name}_probes")  # //<blend>_<grid>_probes
     assert os.path.isfile(os.path.join(probe_dir, "manifest.json"))
     assert not os.path.exists(probe_dir + ".baking")
     manifest = helpers.addon("core.probe_set").read_manifest(probe_dir)

@@ -133,7 +133,7 @@ def test_import_sets_up_a_grid_that_bakes_and_compares_by_collection():
     _check(result, "imported", "grid 'probe_box': 3×2×2 probes at 32²", "saved")
     result = probe_scene.run_batch(with_grid, "bake")
     assert result.returncode == 0, result.stdout + result.stderr
-    manifest = json.load(open(os.path.join(folder, "probe_box_probes", "manifest.json")))
+    manifest = json.load(open(os.path.join(folder, "with_grid_probe_box_probes", "manifest.json")))
     assert len(manifest["probes"]) == 12
     result = probe_scene.run_batch(with_grid, "compare", "--reference-collection", "reference",
                                    "--out", os.path.join(folder, "cmp"))

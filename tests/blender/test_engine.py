@@ -108,7 +108,7 @@ def test_no_camera_is_a_clear_error_and_the_scene_stays():
 def test_no_baked_grid_is_a_clear_error_and_the_scene_stays():
     bpy.context.scene.render.engine = "LFPROBE"
     probe_scene.add_camera()
-    probe_scene.add_grid(probe_scene.baked_probe_set(), baked=False)
+    probe_scene.add_grid(os.path.join(helpers.tmp_dir(), "not_baked"), baked=False)
     before = _scene_snapshot()
     helpers.expect_operator_error(lambda: bpy.ops.render.render(), "no baked probe grid")
     assert _scene_snapshot() == before

@@ -29,7 +29,9 @@ def test_add_grid_defaults_and_selected_sources():
     assert grid.is_grid and not grid.baked
     assert tuple(grid.counts) == (2, 2, 2)
     assert grid.resolution == 512 and grid.coarse_resolution == 0
-    assert grid.probe_dir == f"//{grid_obj.name}_probes"
+    # The folder is the default until the first bake: //<grid>_probes while the .blend is unsaved.
+    assert grid.probe_dir == "" and len(grid.grid_id) == 32
+    assert helpers.addon("blender.grid").default_probe_dir(grid_obj) == f"//{grid_obj.name}_probes"
     assert [s.obj for s in grid.sources] == [scan]
     assert helpers.addon("blender.grid").baked_grids(bpy.context.scene) == []
 
@@ -77,7 +79,7 @@ def test_probe_dir_is_relative_to_the_blend():
     folder = helpers.tmp_dir()
     bpy.ops.wm.save_as_mainfile(filepath=os.path.join(folder, "scene.blend"))
     grid = helpers.addon("blender.grid")
-    assert grid.probe_dir_abspath(grid_obj) == os.path.join(folder, f"{grid_obj.name}_probes")
+    assert grid.probe_dir_abspath(grid_obj) == os.path.join(folder, f"scene_{grid_obj.name}_probes")
     grid_obj.lfprobe_grid.probe_dir = "/somewhere/else"
     assert grid.probe_dir_abspath(grid_obj) == "/somewhere/else"
 

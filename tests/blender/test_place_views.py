@@ -130,7 +130,7 @@ def test_adds_a_probe_for_the_hidden_view_in_the_scene_frame():
     assert [s["path"] for s in manifest["sources"]] == scan.lfprobe_scan.paths()
     world = np.add(manifest["world_offset"], manifest["probes"][2]["position"])
     np.testing.assert_allclose(world, np.add(GEO_OFFSET, HIDDEN_EYE), atol=1e-4)
-    assert sorted(os.listdir(folder)) == ["ProbeGrid_probes", "scene.blend"]  # no staging left
+    assert sorted(os.listdir(folder)) == ["scene.blend", "scene_ProbeGrid_probes"]  # no staging left
 
     grid = grid_obj.lfprobe_grid
     placement = grid.placement()
@@ -236,7 +236,7 @@ def test_bad_input_reports_an_error_and_keeps_the_previous_set():
 
     assert open(os.path.join(probe_dir, "manifest.json")).read() == manifest
     assert grid_obj.lfprobe_grid.coverage_json == coverage and grid_obj.lfprobe_grid.placement() == {}
-    assert sorted(os.listdir(folder)) == ["ProbeGrid_probes", "scene.blend"]
+    assert sorted(os.listdir(folder)) == ["scene.blend", "scene_ProbeGrid_probes"]
 
 
 def test_cancel_keeps_the_previous_set():
@@ -266,7 +266,7 @@ def test_cancel_keeps_the_previous_set():
     assert "starting" in stages, stages
     assert open(os.path.join(probe_dir, "manifest.json")).read() == manifest
     assert grid_obj.lfprobe_grid.placement() == {}
-    assert sorted(os.listdir(folder)) == ["ProbeGrid_probes", "scene.blend"]
+    assert sorted(os.listdir(folder)) == ["scene.blend", "scene_ProbeGrid_probes"]
 
 
 def test_batch_cli_place():

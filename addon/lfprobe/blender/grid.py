@@ -5,12 +5,15 @@ operators/grid.py."""
 
 import math
 import os
+import uuid
+from typing import NamedTuple, Optional
 
 import bpy
 import numpy as np
 
 from ..core import native
 from ..core.errors import InputError
+from ..core.probe_set import MANIFEST, read_manifest
 
 
 ROTATION_TOLERANCE = 1e-6
@@ -53,7 +56,11 @@ def probe_positions(obj) -> np.ndarray:
 
 
 def default_probe_dir(obj) -> str:
-    return f"//{bpy.path.clean_name(obj.name)}_probes"
+    """//<blend name>_<grid name>_probes: unique per grid and .blend, so that two .blend files
+    in one folder never bake into one set (//<grid name>_probes while the .blend is unsaved)."""
+    blend = bpy.path.display_name_from_filepath(bpy.data.filepath) if bpy.data.filepath else ""
+    prefix = f"{bpy.path.clean_name(blend)}_" if blend else ""
+    return f"//{prefix}{bpy.path.clean_name(obj.name)}_probes"
 
 
 def probe_dir_abspath(grid_obj) -> str:
@@ -62,9 +69,129 @@ def probe_dir_abspath(grid_obj) -> str:
     return os.path.normpath(bpy.path.abspath(path))
 
 
+# A probe set is bound to the grid it was baked for: Bake records the grid's id (a random
+# string the grid keeps), name and .blend in the manifest's "bake" record under this key, and a
+# grid only traces a set whose record names its id. Whether a grid is baked is read from the set
+# on disk, not from a property that undo rewinds.
+GRID_RECORD = "blender_grid"
+
+
+def new_grid_id() -> str:
+    return uuid.uuid4().hex
+
+
+def grid_record(obj) -> dict:
+    """What a bake records of the grid it bakes for (the manifest's bake["grid"])."""
+    return {"id": obj.lfprobe_grid.grid_id, "name": obj.name, "blend": os.path.basename(bpy.data.filepath)}
+
+
+_manifests: dict = {}
+
+
+def cached_manifest(folder: str) -> Optional[dict]:
+    """The manifest of the set in `folder`, or None when there is none or it does not read;
+    re-read only when the file changes (panels draw often)."""
+    path = os.path.join(folder, MANIFEST)
+    try:
+        stat = os.stat(path)
+    except OSError:
+        return None
+    key = (stat.st_mtime_ns, stat.st_size)
+    hit = _manifests.get(path)
+    if hit is not None and hit[0] == key:
+        return hit[1]
+    try:
+        manifest = read_manifest(folder)
+    except (OSError, ValueError):
+        manifest = None
+    _manifests[path] = (key, manifest)
+    return manifest
+
+
+def recorded_grid(manifest: Optional[dict]) -> Optional[dict]:
+    """The grid a set was baked for, or None for a set baked outside Blender (./lfprobe bake)."""
+    record = ((manifest or {}).get("bake") or {}).get(GRID_RECORD)
+    return record if isinstance(record, dict) else None
+
+
+def _grids_sharing_id(obj) -> list:
+    grid_id = obj.lfprobe_grid.grid_id
+    if not grid_id:
+        return []
+    return [o for o in bpy.data.objects if o is not obj and is_grid(o) and o.lfprobe_grid.grid_id == grid_id]
+
+
+def is_copy(obj, recorded_name: Optional[str]) -> bool:
+    """True when `obj` shares its id with other grids (Duplicate copies it) and is not the one
+    the id belongs to: the grid named in the set's record, else the first by name."""
+    others = _grids_sharing_id(obj)
+    if not others:
+        return False
+    group = [obj, *others]
+    owner = next((o for o in group if o.name == recorded_name), None) or min(group, key=lambda o: o.name)
+    return owner is not obj
+
+
+def _described(record: dict) -> str:
+    blend = record.get("blend")
+    return f"grid {record.get('name')!r}" + (f" of {blend}" if blend else " of an unsaved .blend")
+
+
+class BoundSet(NamedTuple):
+    """The grid's probe folder, the manifest there (None: not baked) and, when the set is not
+    this grid's to trace, why (empty otherwise)."""
+
+    folder: str
+    manifest: Optional[dict]
+    problem: str
+
+    @property
+    def usable(self) -> bool:
+        return self.manifest is not None and not self.problem
+
+
+def bound_set(obj) -> BoundSet:
+    """The probe set in the grid's folder, checked against the grid it was baked for."""
+    folder = probe_dir_abspath(obj)
+    manifest = cached_manifest(folder)
+    record = recorded_grid(manifest)
+    if record is None:
+        return BoundSet(folder, manifest, "")
+    if record.get("id") != obj.lfprobe_grid.grid_id:
+        return BoundSet(folder, manifest, (
+            f"the probe set in {folder} was baked for {_described(record)}, not for grid {obj.name!r}: "
+            "bake this grid (and give it a Probe Folder of its own if it shares that one)"))
+    if is_copy(obj, record.get("name")):
+        return BoundSet(folder, manifest, (
+            f"grid {obj.name!r} is a copy of {_described(record)} and shares its probe set in {folder}: "
+            "bake it to give it a probe set of its own"))
+    return BoundSet(folder, manifest, "")
+
+
+def claim_probe_folder(obj) -> None:
+    """Before a bake writes the grid's folder: a grid without an id gets one; a copy that shares
+    its original's id gets its own, and its own folder when it shares the original's; a folder
+    that holds the set of another grid of this file is refused (GridError), as baking would
+    take that grid's probes away."""
+    grid = obj.lfprobe_grid
+    if not grid.grid_id:
+        grid.grid_id = new_grid_id()
+    others = _grids_sharing_id(obj)
+    if others and is_copy(obj, (recorded_grid(cached_manifest(probe_dir_abspath(obj))) or {}).get("name")):
+        shared = {probe_dir_abspath(o) for o in others}
+        grid.grid_id = new_grid_id()
+        if probe_dir_abspath(obj) in shared:
+            grid.probe_dir = ""  # the default: named after this grid
+    record = recorded_grid(cached_manifest(probe_dir_abspath(obj)))
+    if record is not None and record.get("id") != grid.grid_id:
+        owner = next((o for o in bpy.data.objects if is_grid(o) and o.lfprobe_grid.grid_id == record.get("id")), None)
+        if owner is not None:
+            raise GridError(
+                f"grid {obj.name!r}: its probe folder {probe_dir_abspath(obj)} holds the probes of grid "
+                f"{owner.name!r}, which baking would replace: give this grid a Probe Folder of its own")
+
+
 def baked_grids(scene) -> list:
-    """The scene's grids that have a finished probe set, in name order."""
-    return sorted(
-        (obj for obj in scene.objects if is_grid(obj) and obj.lfprobe_grid.baked),
-        key=lambda obj: obj.name,
-    )
+    """The scene's grids whose folder holds a probe set baked for them, in name order."""
+    return sorted((obj for obj in scene.objects if is_grid(obj) and bound_set(obj).usable),
+                  key=lambda obj: obj.name)

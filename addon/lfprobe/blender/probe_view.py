@@ -38,6 +38,12 @@ def grid_to_trace(scene, name: str = ""):
         return chosen
     baked = grid_module.baked_grids(scene)
     if not baked:
+        # A grid that was baked but whose set is gone or not its own: its own error says which.
+        once_baked = sorted((obj for obj in scene.objects if grid_module.is_grid(obj)
+                             and (obj.lfprobe_grid.baked or grid_module.bound_set(obj).problem)),
+                            key=lambda obj: obj.name)
+        if once_baked:
+            return once_baked[0]
         raise grid_module.GridError(
             f"scene '{scene.name}' has no baked probe grid: add a probe grid "
             "(Add > Light Field Probe Grid) and bake it"
@@ -46,7 +52,8 @@ def grid_to_trace(scene, name: str = ""):
 
 
 def probe_folder(grid_obj) -> str:
-    """The grid's probe set folder; raises TraceSetupError when no finished set is there."""
+    """The grid's probe set folder; raises TraceSetupError when no finished set baked for this
+    grid is there."""
     folder = grid_module.probe_dir_abspath(grid_obj)
     if not os.path.isdir(folder):
         raise TraceSetupError(
@@ -57,6 +64,9 @@ def probe_folder(grid_obj) -> str:
         read_manifest(folder)
     except (FileNotFoundError, ValueError) as error:
         raise TraceSetupError(f"grid '{grid_obj.name}': {error}; bake the grid again") from error
+    problem = grid_module.bound_set(grid_obj).problem
+    if problem:
+        raise TraceSetupError(problem)
     return folder
 
 

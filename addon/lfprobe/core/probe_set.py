@@ -7,6 +7,8 @@ import json
 import os
 from typing import Optional
 
+from .atomic_write import atomic_open
+
 MANIFEST = "manifest.json"
 PAPER_BYTES_PER_2048_PROBE = 24.375 * 1024 * 1024  # the paper's figure: 2048² + 128² maps
 
@@ -77,3 +79,13 @@ def summarize(folder: str) -> dict:
         "sources": manifest.get("sources", []),
         "probes": probes,
     }
+
+
+def record_in_bake(folder: str, key: str, value) -> None:
+    """Adds `key`: `value` to the set's "bake" record (what the bake was), rewriting the manifest
+    atomically; the native reader keeps that record as it is."""
+    manifest = read_manifest(folder)
+    bake = manifest.get("bake")
+    manifest["bake"] = dict(bake if isinstance(bake, dict) else {}, **{key: value})
+    with atomic_open(os.path.join(folder, MANIFEST), "w") as stream:
+        json.dump(manifest, stream, indent=2)

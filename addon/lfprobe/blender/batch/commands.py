@@ -46,8 +46,8 @@ def run_import(args) -> int:
             raise BatchError(f"--grid-from: no Empty named '{args.grid_from}' in scene '{scene.name}'")
         grid = grid_obj.lfprobe_grid
         grid.is_grid = True
-        if not grid.probe_dir:
-            grid.probe_dir = grid_module.default_probe_dir(grid_obj)
+        if not grid.grid_id:
+            grid.grid_id = grid_module.new_grid_id()
         stored = grid_obj.get("counts")
         if stored is not None and len(stored) == 3:
             grid.counts = [int(c) for c in stored]

@@ -18,7 +18,7 @@ from ...core.atomic_write import replace_folder
 from ...core.cloud_transform import to_world, transform_scans
 from ...core.errors import InputError
 from ...core import probe_storage
-from ...core.probe_set import read_manifest
+from ...core.probe_set import read_manifest, record_in_bake
 from ...core.sources import default_cache_dir, describe_scan
 from .. import grid as grid_module
 from .. import scan_object
@@ -113,7 +113,11 @@ class GridBake:
     def __init__(self, context, grid_obj):
         low, high = grid_module.grid_box(grid_obj)
         self.scans, self.meshes = gather_sources(grid_obj)
+        grid_module.claim_probe_folder(grid_obj)
         self.folder = probe_folder(grid_obj)
+        # The folder stays the grid's after a rename or Save As: the default becomes explicit.
+        self.probe_dir = grid_obj.lfprobe_grid.probe_dir or grid_module.default_probe_dir(grid_obj)
+        self.grid_record = grid_module.grid_record(grid_obj)
         frame = shared_scan_offset(self.scans) if self.scans else scan_object.frame_offset(context.scene)
         self.grid_name = grid_obj.name
         self.staging = self.folder.rstrip(os.sep) + ".baking"
@@ -151,6 +155,16 @@ class GridBake:
             for path, scan in zip(self.paths, loaded.scans)
         ]
         return cloud, sources
+
+    def bind(self, staging: str) -> None:
+        """Records in the staged set the grid it is baked for (grid.bound_set checks it)."""
+        record_in_bake(staging, grid_module.GRID_RECORD, self.grid_record)
+
+    def mark_baked(self, grid_obj, manifest: dict, base_probes: int = -1) -> None:
+        grid = grid_obj.lfprobe_grid
+        if not grid.probe_dir:
+            grid.probe_dir = self.probe_dir
+        show_baked_set(grid, manifest, base_probes)
 
 
 def show_baked_set(grid, manifest: dict, base_probes: int = -1) -> None:
@@ -246,6 +260,7 @@ class LFPROBE_OT_bake(GridJobOperator, bpy.types.Operator):
         # The jobs ran with start_only, which leaves the storage to the caller: recorded while
         # the set is still staged, so the folder never holds a set that loads otherwise.
         pipeline.apply_storage(self._staging, result, inputs.options)
+        inputs.bind(self._staging)
         replace_folder(self._staging, inputs.folder)
         self._staging = None
         manifest = read_manifest(inputs.folder)
@@ -253,7 +268,7 @@ class LFPROBE_OT_bake(GridJobOperator, bpy.types.Operator):
         if grid_obj is None or not grid_module.is_grid(grid_obj):
             self.report({"WARNING"}, f"Baked into {inputs.folder}, but grid {inputs.grid_name!r} was removed meanwhile")
             return {"FINISHED"}
-        show_baked_set(grid_obj.lfprobe_grid, manifest)
+        inputs.mark_baked(grid_obj, manifest)
         mean = result.get("mean_coverage", {})
         self.report(
             {"INFO"},

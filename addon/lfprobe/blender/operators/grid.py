@@ -6,7 +6,7 @@ from bpy.props import FloatProperty, IntProperty
 from mathutils import Vector
 
 from ...core.grid_fit import box_location_and_scale, counts_for_spacing, fitted_box
-from ..grid import default_probe_dir, is_grid
+from ..grid import is_grid, new_grid_id
 from .menu_registration import classes_with_menu_entry
 
 
@@ -30,7 +30,7 @@ class LFPROBE_OT_grid_add(bpy.types.Operator):
         (context.collection or context.scene.collection).objects.link(obj)
         grid = obj.lfprobe_grid
         grid.is_grid = True
-        grid.probe_dir = default_probe_dir(obj)
+        grid.grid_id = new_grid_id()  # the probe folder stays the default until the first bake
         # Bake from the selected scan clouds, as a start.
         for candidate in context.selected_objects:
             if candidate.type == "MESH" and candidate.lfprobe_scan.is_scan:

@@ -192,6 +192,7 @@ class LFPROBE_OT_place_for_views(bake.GridJobOperator, bpy.types.Operator):
                                                          sources=sources, progress=report, **settings),
                 name="lfprobe adaptive placement",
             )
+        inputs.bind(self._staging)
         replace_folder(self._staging, inputs.folder)
         self._staging = None
         manifest = read_manifest(inputs.folder)
@@ -201,7 +202,7 @@ class LFPROBE_OT_place_for_views(bake.GridJobOperator, bpy.types.Operator):
             self.report({"WARNING"}, f"Placed into {inputs.folder}, but grid {inputs.grid_name!r} was removed meanwhile")
             return {"FINISHED"}
         grid = grid_obj.lfprobe_grid
-        bake.show_baked_set(grid, manifest, base_probes=result.base_probes)
+        inputs.mark_baked(grid_obj, manifest, base_probes=result.base_probes)
         grid.placement_json = json.dumps(record)
         self.report({"INFO"}, f"Grid {grid_obj.name!r}: {summary_line(record)}; "
                               f"{len(manifest['probes'])} probes in {inputs.folder}")

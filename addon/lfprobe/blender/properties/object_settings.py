@@ -200,7 +200,14 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
         "before and after, memory, why it stopped); {} after a plain bake",
         default="{}",
     )
+    # Kept for files saved before the set on disk said whether a grid is baked (grid.bound_set).
     baked: BoolProperty(name="Baked", default=False)
+    grid_id: StringProperty(
+        name="Grid ID",
+        description="Binds the grid to the probe sets baked for it (recorded in their manifest); "
+        "a duplicate gets its own when it is baked",
+        default="",
+    )
     coverage_json: StringProperty(
         name="Coverage",
         description="Per-probe coverage after baking (JSON list of {surface, inferred, empty, unknown})",

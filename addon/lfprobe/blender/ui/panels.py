@@ -123,9 +123,16 @@ class LFPROBE_PT_grid(_GridPanel, bpy.types.Panel):
         buttons.operator("object.lfprobe_grid_source_remove", icon="REMOVE", text="")
         layout.operator("object.lfprobe_grid_fit", icon="FULLSCREEN_ENTER")
         layout.prop(grid, "probe_dir")
+        if not grid.probe_dir:
+            layout.label(text=f"Default: {grid_module.default_probe_dir(obj)}", icon="FILE_FOLDER")
         layout.operator("object.lfprobe_bake", icon="RENDER_STILL").grid = obj.name
-        coverage = grid.coverage()
-        if grid.baked and coverage:
+        bound = grid_module.bound_set(obj)
+        # After an undo the grid's copy of the coverage may be gone; the set's manifest has it.
+        coverage = grid.coverage() or [p.get("coverage", {}) for p in (bound.manifest or {}).get("probes", [])]
+        if bound.problem:
+            for line in textwrap.wrap(bound.problem, 70):
+                layout.label(text=line, icon="ERROR")
+        elif bound.manifest is not None and coverage:
             known = sum(1.0 - c.get("unknown", 1.0) for c in coverage) / len(coverage)
             layout.label(text=f"Baked: {len(coverage)} probes, {100 * known:.0f}% of directions known", icon="CHECKMARK")
             _draw_storage(layout, obj)
@@ -165,7 +172,7 @@ class LFPROBE_PT_grid_views(_GridPanel, bpy.types.Panel):
         layout.prop(grid, "max_added")
         layout.operator("object.lfprobe_place_for_views", icon="OUTLINER_OB_CAMERA").grid = obj.name
         placement = grid.placement()
-        if grid.baked and placement:
+        if placement and grid_module.bound_set(obj).usable:
             layout.label(text=f"Stopped: {placement.get('stopped_because', '')}")
 
 
