@@ -33,6 +33,19 @@ def _to_bottom_up(array: np.ndarray, channels: int) -> np.ndarray:
     return flipped.reshape(-1, channels)
 
 
+def _set_pass(render_pass, rows: np.ndarray) -> None:
+    """Copies (h·w, c) float32 rows into a render pass in one call: foreach_set takes the rows
+    as they are in Blender 3.4 and flat in Blender 4+; assigning `rect` walks the pixels one by
+    one from Python (0.58 s for 960×540 RGBA, against 2 ms)."""
+    for values in (rows, rows.reshape(-1)):
+        try:
+            render_pass.rect.foreach_set(values)
+            return
+        except (TypeError, AttributeError):
+            continue
+    render_pass.rect = rows
+
+
 _last_drawn_view = [None]  # the ProgressiveView a viewport drew last (for viewport_stats)
 
 
@@ -118,10 +131,10 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
         result = self.begin_result(0, 0, width, height, layer=layer_name)
         try:
             layer = result.layers[0]
-            layer.passes["Combined"].rect = _to_bottom_up(image["rgba"], 4)
-            layer.passes["Depth"].rect = _to_bottom_up(image["depth"], 1)
+            _set_pass(layer.passes["Combined"], _to_bottom_up(image["rgba"], 4))
+            _set_pass(layer.passes["Depth"], _to_bottom_up(image["depth"], 1))
             for name, key in TRACE_PASSES:
-                layer.passes[name].rect = _to_bottom_up(image[key].astype(np.float32), 1)
+                _set_pass(layer.passes[name], _to_bottom_up(image[key].astype(np.float32), 1))
         finally:
             self.end_result(result)
 
