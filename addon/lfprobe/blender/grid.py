@@ -81,7 +81,7 @@ def new_grid_id() -> str:
 
 
 def grid_record(obj) -> dict:
-    """What a bake records of the grid it bakes for (the manifest's bake["grid"])."""
+    """What a bake records of the grid it bakes for (the manifest's bake[GRID_RECORD])."""
     return {"id": obj.lfprobe_grid.grid_id, "name": obj.name, "blend": os.path.basename(bpy.data.filepath)}
 
 
@@ -176,18 +176,20 @@ def claim_probe_folder(obj) -> None:
     grid = obj.lfprobe_grid
     if not grid.grid_id:
         grid.grid_id = new_grid_id()
+    folder = probe_dir_abspath(obj)
+    record = recorded_grid(cached_manifest(folder))
     others = _grids_sharing_id(obj)
-    if others and is_copy(obj, (recorded_grid(cached_manifest(probe_dir_abspath(obj))) or {}).get("name")):
-        shared = {probe_dir_abspath(o) for o in others}
+    if others and is_copy(obj, (record or {}).get("name")):
         grid.grid_id = new_grid_id()
-        if probe_dir_abspath(obj) in shared:
+        if folder in {probe_dir_abspath(o) for o in others}:
             grid.probe_dir = ""  # the default: named after this grid
-    record = recorded_grid(cached_manifest(probe_dir_abspath(obj)))
+            folder = probe_dir_abspath(obj)
+            record = recorded_grid(cached_manifest(folder))
     if record is not None and record.get("id") != grid.grid_id:
         owner = next((o for o in bpy.data.objects if is_grid(o) and o.lfprobe_grid.grid_id == record.get("id")), None)
         if owner is not None:
             raise GridError(
-                f"grid {obj.name!r}: its probe folder {probe_dir_abspath(obj)} holds the probes of grid "
+                f"grid {obj.name!r}: its probe folder {folder} holds the probes of grid "
                 f"{owner.name!r}, which baking would replace: give this grid a Probe Folder of its own")
 
 

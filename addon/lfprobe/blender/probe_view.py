@@ -60,13 +60,14 @@ def probe_folder(grid_obj) -> str:
             f"grid '{grid_obj.name}': its probe folder {folder} does not exist; bake the grid "
             "(or set its Probe Folder to a baked probe set)"
         )
-    try:
-        read_manifest(folder)
-    except (FileNotFoundError, ValueError) as error:
-        raise TraceSetupError(f"grid '{grid_obj.name}': {error}; bake the grid again") from error
-    problem = grid_module.bound_set(grid_obj).problem
-    if problem:
-        raise TraceSetupError(problem)
+    bound = grid_module.bound_set(grid_obj)
+    if bound.manifest is None:
+        try:
+            read_manifest(folder)  # for the reason: missing, or not a probe set
+        except (FileNotFoundError, ValueError) as error:
+            raise TraceSetupError(f"grid '{grid_obj.name}': {error}; bake the grid again") from error
+    if bound.problem:
+        raise TraceSetupError(bound.problem)
     return folder
 
 
