@@ -134,7 +134,7 @@ BakeRequest make_request(const std::string& folder, int resolution,
                          std::optional<std::vector<double>> grid_max,
                          std::optional<std::vector<int>> counts, bool positions_in_world,
                          const std::string& sources_json, float splat_scale, int hole_fill_texels,
-                         int max_splat_radius_texels, int normal_neighbours) {
+                         int max_splat_radius_texels, int normal_neighbours, float lod_texels) {
     BakeRequest r;
     r.folder = folder;
     r.resolution = resolution;
@@ -148,6 +148,7 @@ BakeRequest make_request(const std::string& folder, int resolution,
     r.settings.splat_scale = splat_scale;
     r.settings.hole_fill_texels = hole_fill_texels;
     r.settings.max_splat_radius_texels = max_splat_radius_texels;
+    r.settings.lod_texels = lod_texels;
     r.geometry.normal_neighbours = normal_neighbours;
     return r;
 }
@@ -211,6 +212,7 @@ py::dict defaults_dict() {
     baking["hole_fill_texels"] = bake.hole_fill_texels;
     baking["max_splat_radius_texels"] = bake.max_splat_radius_texels;
     baking["normal_neighbours"] = LocalGeometryOptions{}.normal_neighbours;
+    baking["lod_texels"] = as_written(bake.lod_texels);
     baking["supersample"] = MeshBakeSettings{}.supersample;
     py::dict d;
     d["trace"] = trace;
@@ -410,13 +412,14 @@ PYBIND11_MODULE(_native, m) {
            std::vector<std::vector<double>> positions, std::optional<std::vector<double>> grid_min,
            std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
            bool positions_in_world, const std::string& sources_json, float splat_scale,
-           int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours) {
+           int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours,
+           float lod_texels) {
             return start_bake(std::move(cloud),
                               make_request(folder, resolution, std::move(positions),
                                            std::move(grid_min), std::move(grid_max),
                                            std::move(counts), positions_in_world, sources_json,
                                            splat_scale, hole_fill_texels, max_splat_radius_texels,
-                                           normal_neighbours));
+                                           normal_neighbours, lod_texels));
         };
     const BakeSettings defaults;
     const LocalGeometryOptions geometry_defaults;
@@ -429,9 +432,11 @@ PYBIND11_MODULE(_native, m) {
           py::arg("hole_fill_texels") = defaults.hole_fill_texels,
           py::arg("max_splat_radius_texels") = defaults.max_splat_radius_texels,
           py::arg("normal_neighbours") = geometry_defaults.normal_neighbours,
+          py::arg("lod_texels") = defaults.lod_texels,
           "Start baking a probe set from a cloud into `folder`; positions or grid corners are "
-          "world coordinates unless positions_in_world is False. The Job's result is a summary "
-          "dict.");
+          "world coordinates unless positions_in_world is False. lod_texels: how many texels "
+          "apart the point hierarchy's cell surfels may be where they stand in for points (0: "
+          "every point). The Job's result is a summary dict.");
     m.def(
         "bake_probe_set",
         [start_bake_fn](
@@ -440,11 +445,12 @@ PYBIND11_MODULE(_native, m) {
             std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
             bool positions_in_world, const std::string& sources_json, float splat_scale,
             int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours,
-            const py::object& progress) {
-            auto job = start_bake_fn(std::move(cloud), folder, resolution, std::move(positions),
-                                     std::move(grid_min), std::move(grid_max), std::move(counts),
-                                     positions_in_world, sources_json, splat_scale,
-                                     hole_fill_texels, max_splat_radius_texels, normal_neighbours);
+            float lod_texels, const py::object& progress) {
+            auto job =
+                start_bake_fn(std::move(cloud), folder, resolution, std::move(positions),
+                              std::move(grid_min), std::move(grid_max), std::move(counts),
+                              positions_in_world, sources_json, splat_scale, hole_fill_texels,
+                              max_splat_radius_texels, normal_neighbours, lod_texels);
             return job->run(progress);
         },
         py::arg("cloud"), py::arg("folder"), py::arg("resolution") = defaults.resolution,
@@ -455,7 +461,8 @@ PYBIND11_MODULE(_native, m) {
         py::arg("hole_fill_texels") = defaults.hole_fill_texels,
         py::arg("max_splat_radius_texels") = defaults.max_splat_radius_texels,
         py::arg("normal_neighbours") = geometry_defaults.normal_neighbours,
-        py::arg("progress") = py::none(), "bake run to the end; see start_bake_probe_set.");
+        py::arg("lod_texels") = defaults.lod_texels, py::arg("progress") = py::none(),
+        "bake run to the end; see start_bake_probe_set.");
 
     lfprobe::python::bind_render(m);
     lfprobe::python::bind_mesh(m);

@@ -13,6 +13,7 @@
 #include <tbb/parallel_sort.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/morton.hpp"
 
 namespace lfprobe {
 
@@ -36,17 +37,6 @@ using KdTree =
 
 constexpr std::size_t kChunk = 16384;
 
-// Spreads the low 21 bits of v so that two zero bits follow each one.
-std::uint64_t spread_bits(std::uint64_t v) {
-    v &= 0x1fffff;
-    v = (v | v << 32) & 0x1f00000000ffffull;
-    v = (v | v << 16) & 0x1f0000ff0000ffull;
-    v = (v | v << 8) & 0x100f00f00f00f00full;
-    v = (v | v << 4) & 0x10c30c30c30c30c3ull;
-    v = (v | v << 2) & 0x1249249249249249ull;
-    return v;
-}
-
 } // namespace
 
 std::vector<std::uint32_t> morton_order(const std::vector<glm::vec3>& positions) {
@@ -65,8 +55,7 @@ std::vector<std::uint32_t> morton_order(const std::vector<glm::vec3>& positions)
         const auto cell = [&](int a) {
             return static_cast<std::uint64_t>(std::clamp(q[a], 0.0f, cells));
         };
-        keyed[i] = {spread_bits(cell(0)) | spread_bits(cell(1)) << 1 | spread_bits(cell(2)) << 2,
-                    static_cast<std::uint32_t>(i)};
+        keyed[i] = {morton::key(cell(0), cell(1), cell(2)), static_cast<std::uint32_t>(i)};
     });
     tbb::parallel_sort(keyed.begin(), keyed.end());
     std::vector<std::uint32_t> order(n);

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <limits>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <vector>
 
@@ -16,47 +17,106 @@
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/octahedral.hpp"
+#include "lfprobe/point_colours.hpp"
 
 namespace lfprobe {
 
 namespace {
 
 constexpr std::uint64_t kNoPoint = std::numeric_limits<std::uint64_t>::max();
+// A texel's winner key: off-centre angle bits (a non-negative float's, so bit 63 is free) over
+// the point's id; bit 63 marks the far side of a cell surfel.
+constexpr std::uint64_t kFarSide = std::uint64_t{1} << 63;
 constexpr std::size_t kPointChunk = 65536;
 // Below this |cos| between the texel ray and the surfel normal the surfel plane is too
 // grazing to extrapolate a depth from, and the point's own radial distance is used.
 constexpr float kMinPlaneCosine = 0.05f;
 
-// The smallest angle between the centres of two neighbouring texels of an N×N map: a lower
-// bound on the angular size of any texel, which turns an angular splat radius into a texel
-// search radius that is never too small.
-float min_texel_angle(int n) {
-    static std::mutex mutex;
-    static std::map<int, float> cache;
-    std::lock_guard lock(mutex);
-    if (auto it = cache.find(n); it != cache.end()) {
-        return it->second;
-    }
-    float smallest = std::numeric_limits<float>::infinity();
-    for (int y = 0; y < n; ++y) {
-        for (int x = 0; x < n; ++x) {
-            const glm::vec3 d = oct::texel_direction({x, y}, n);
-            if (x + 1 < n) {
-                const glm::vec3 e = oct::texel_direction({x + 1, y}, n);
-                smallest = std::min(smallest, std::acos(std::min(1.0f, glm::dot(d, e))));
+// Lower bounds on the angle between the centres of two neighbouring texels of an N×N map, for
+// turning an angular splat radius into a texel search radius that is never too small. The
+// octahedral map's texels shrink to about half the mean angle near its corners and are near
+// the mean elsewhere, so one bound for the whole map would make most searches four times the
+// area they need: the bound is kept per block of texels (the block and the blocks around it),
+// and the whole map's is used where a search reaches beyond the blocks around.
+class TexelAngleBounds {
+public:
+    static constexpr int kBlock = 16;
+
+    explicit TexelAngleBounds(int n) : blocks_((n + kBlock - 1) / kBlock) {
+        std::vector<float> own(static_cast<std::size_t>(blocks_) * blocks_,
+                               std::numeric_limits<float>::infinity());
+        tbb::parallel_for(0, blocks_, [&](int by) {
+            for (int y = by * kBlock; y < std::min(n, (by + 1) * kBlock); ++y) {
+                for (int x = 0; x < n; ++x) {
+                    const glm::vec3 d = oct::texel_direction({x, y}, n);
+                    float smallest = std::numeric_limits<float>::infinity();
+                    if (x + 1 < n) {
+                        smallest =
+                            std::min(smallest, angle(d, oct::texel_direction({x + 1, y}, n)));
+                    }
+                    if (y + 1 < n) {
+                        smallest =
+                            std::min(smallest, angle(d, oct::texel_direction({x, y + 1}, n)));
+                    }
+                    float& slot = own[static_cast<std::size_t>(by) * blocks_ + x / kBlock];
+                    slot = std::min(slot, smallest);
+                }
             }
-            if (y + 1 < n) {
-                const glm::vec3 e = oct::texel_direction({x, y + 1}, n);
-                smallest = std::min(smallest, std::acos(std::min(1.0f, glm::dot(d, e))));
+        });
+        global_ = *std::min_element(own.begin(), own.end());
+        if (!(global_ > 0.0f)) {
+            global_ = 1e-6f;
+        }
+        // Each block's bound covers the blocks around it too (the map wraps at its edges).
+        around_.assign(own.size(), global_);
+        for (int by = 0; by < blocks_; ++by) {
+            for (int bx = 0; bx < blocks_; ++bx) {
+                float smallest = std::numeric_limits<float>::infinity();
+                for (int dy = -1; dy <= 1; ++dy) {
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        const int y = (by + dy + blocks_) % blocks_;
+                        const int x = (bx + dx + blocks_) % blocks_;
+                        smallest =
+                            std::min(smallest, own[static_cast<std::size_t>(y) * blocks_ + x]);
+                    }
+                }
+                around_[static_cast<std::size_t>(by) * blocks_ + bx] = std::max(smallest, global_);
             }
         }
     }
-    if (!(smallest > 0.0f)) {
-        smallest = 1e-6f;
+
+    // The search radius in texels around `home` that holds every texel within `alpha` radians
+    // of a direction in `home`: a texel k steps away lies at least (k - 0.5) bounds away.
+    [[nodiscard]] int search_radius(oct::Texel home, float alpha, int max_radius) const {
+        const float local =
+            around_[static_cast<std::size_t>(home.y / kBlock) * blocks_ + home.x / kBlock];
+        const int r = static_cast<int>(std::ceil(alpha / local + 0.5f));
+        if (r <= kBlock) {
+            return std::min(max_radius, r);
+        }
+        return std::min(max_radius, static_cast<int>(std::ceil(alpha / global_ + 0.5f)));
     }
-    cache[n] = smallest;
-    return smallest;
-}
+
+    // One bound set per resolution, made once.
+    static const TexelAngleBounds& of(int n) {
+        static std::mutex mutex;
+        static std::map<int, std::unique_ptr<TexelAngleBounds>> cache;
+        std::lock_guard lock(mutex);
+        std::unique_ptr<TexelAngleBounds>& slot = cache[n];
+        if (!slot) {
+            slot = std::make_unique<TexelAngleBounds>(n);
+        }
+        return *slot;
+    }
+
+private:
+    static float angle(const glm::vec3& a, const glm::vec3& b) {
+        return std::acos(std::min(1.0f, glm::dot(a, b)));
+    }
+    int blocks_;
+    float global_ = 0.0f;
+    std::vector<float> around_;
+};
 
 // A point as one probe sees it: offset v from the probe centre, its distance and direction,
 // its normal (oriented toward its scanner where that is known, else toward the probe), normal·v
@@ -177,11 +237,67 @@ std::uint32_t ordered_bits(float non_negative) {
     return std::bit_cast<std::uint32_t>(non_negative);
 }
 
-} // namespace
+// What a bake splats, visited j = 0 … count() - 1: id(j) names the visited point (a texel's
+// winner among equally central points is the smaller id), and the attributes are read by id.
+// Every point of a cloud, in spatial order: neighbouring points write neighbouring texels,
+// which keeps the texel buffers in cache.
+struct CloudPoints {
+    const PointCloud& cloud;
+    const LocalGeometry& geometry;
+    PointColours colours;
+    bool spatial;
 
-ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geometry,
-                               const glm::dvec3& centre, const BakeSettings& settings,
-                               Progress* progress) {
+    CloudPoints(const PointCloud& c, const LocalGeometry& g)
+        : cloud(c), geometry(g), colours(c), spatial(g.spatial_order.size() == c.size()) {}
+    [[nodiscard]] std::size_t count() const { return cloud.size(); }
+    [[nodiscard]] std::size_t id(std::size_t j) const {
+        return spatial ? std::size_t{geometry.spatial_order[j]} : j;
+    }
+    [[nodiscard]] glm::vec3 position(std::size_t i) const { return cloud.positions[i]; }
+    [[nodiscard]] glm::vec3 normal(std::size_t i) const { return geometry.normals[i]; }
+    [[nodiscard]] bool oriented(std::size_t i) const { return geometry.oriented[i] != 0; }
+    [[nodiscard]] float spacing(std::size_t i) const { return geometry.spacing[i]; }
+    [[nodiscard]] glm::vec3 colour(std::size_t i) const { return colours(i); }
+    [[nodiscard]] static bool is_cell_surfel(std::size_t /*i*/) { return false; }
+};
+
+// A probe's cut of the point hierarchy: its full-density points first, then its cell surfels.
+struct CutPoints {
+    const PointCloud& cloud;
+    const LocalGeometry& geometry;
+    const PointColours& colours;
+    const HierarchyCut& cut;
+
+    [[nodiscard]] std::size_t count() const { return cut.size(); }
+    [[nodiscard]] std::size_t id(std::size_t j) const { return j; }
+    [[nodiscard]] const CellSurfel* surfel(std::size_t i) const {
+        return i < cut.points.size() ? nullptr : &cut.surfels[i - cut.points.size()];
+    }
+    [[nodiscard]] glm::vec3 position(std::size_t i) const {
+        const CellSurfel* s = surfel(i);
+        return s != nullptr ? s->position : cloud.positions[cut.points[i]];
+    }
+    [[nodiscard]] glm::vec3 normal(std::size_t i) const {
+        const CellSurfel* s = surfel(i);
+        return s != nullptr ? s->normal : geometry.normals[cut.points[i]];
+    }
+    [[nodiscard]] bool oriented(std::size_t i) const {
+        const CellSurfel* s = surfel(i);
+        return s != nullptr ? s->oriented != 0 : geometry.oriented[cut.points[i]] != 0;
+    }
+    [[nodiscard]] float spacing(std::size_t i) const {
+        const CellSurfel* s = surfel(i);
+        return s != nullptr ? s->spacing : geometry.spacing[cut.points[i]];
+    }
+    [[nodiscard]] glm::vec3 colour(std::size_t i) const {
+        const CellSurfel* s = surfel(i);
+        return s != nullptr ? s->colour : colours(cut.points[i]);
+    }
+    [[nodiscard]] bool is_cell_surfel(std::size_t i) const { return i >= cut.points.size(); }
+};
+
+void check_bake_arguments(const BakeSettings& settings, std::size_t points,
+                          const LocalGeometry& geometry, const glm::dvec3& centre) {
     const int n = settings.resolution;
     if (n < 2 || n > 16384) {
         throw InputError("bake: resolution must be between 2 and 16384, got " + std::to_string(n));
@@ -189,18 +305,27 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     if (!(settings.splat_plane_reach > 0.0f) || !std::isfinite(settings.splat_plane_reach)) {
         throw InputError("bake: splat_plane_reach must be a positive number of splat radii");
     }
-    if (cloud.size() > std::numeric_limits<std::uint32_t>::max()) {
+    if (!(settings.lod_texels >= 0.0f) || !std::isfinite(settings.lod_texels)) {
+        throw InputError("bake: lod_texels must be a finite number of texels, 0 or more");
+    }
+    if (points > std::numeric_limits<std::uint32_t>::max()) {
         throw InputError("bake: at most 2^32-1 points per cloud");
     }
-    if (geometry.normals.size() != cloud.size() || geometry.spacing.size() != cloud.size()) {
+    if (geometry.normals.size() != points || geometry.spacing.size() != points) {
         throw InputError("bake: local geometry does not belong to this cloud");
     }
     if (!(std::isfinite(centre.x) && std::isfinite(centre.y) && std::isfinite(centre.z))) {
         throw InputError("bake: probe position must be finite");
     }
+}
+
+template <class Source>
+ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSettings& settings,
+                   Progress* progress) {
+    const int n = settings.resolution;
     ProbeMap map(n, centre);
     const std::size_t texels = map.texel_count();
-    const float texel_angle = min_texel_angle(n);
+    const TexelAngleBounds& texel_angles = TexelAngleBounds::of(n);
     std::vector<glm::vec3> directions(texels);
     tbb::parallel_for(0, n, [&](int y) {
         for (int x = 0; x < n; ++x) {
@@ -208,20 +333,20 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
         }
     });
     const int max_radius = std::max(1, std::min(settings.max_splat_radius_texels, n / 2));
-    const std::size_t count = cloud.size();
+    const std::size_t count = source.count();
 
     // Point i as this probe sees it; false for a point at the probe centre (no direction).
     auto surfel_of = [&](std::size_t i, Surfel& p) {
-        p.v = glm::vec3(glm::dvec3(cloud.positions[i]) - centre);
+        p.v = glm::vec3(glm::dvec3(source.position(i)) - centre);
         p.dist = glm::length(p.v);
         if (!(p.dist >= settings.min_distance)) {
             return false;
         }
         p.dir = p.v / p.dist;
-        const glm::vec3 normal = geometry.normals[i];
-        p.normal = !geometry.oriented[i] && glm::dot(normal, p.v) > 0.0f ? -normal : normal;
+        const glm::vec3 normal = source.normal(i);
+        p.normal = !source.oriented(i) && glm::dot(normal, p.v) > 0.0f ? -normal : normal;
         p.normal_v = glm::dot(p.normal, p.v);
-        p.reach = settings.splat_plane_reach * settings.splat_scale * geometry.spacing[i];
+        p.reach = settings.splat_plane_reach * settings.splat_scale * source.spacing(i);
         return true;
     };
     // Calls visit(texel, surfel, plane hit) for every texel point i's splat covers: the texels
@@ -233,13 +358,13 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
             return;
         }
         const oct::Texel home = oct::texel_of_direction(p.dir, n);
-        p.splat_angle = std::atan2(settings.splat_scale * geometry.spacing[i], p.dist);
+        p.splat_angle = std::atan2(settings.splat_scale * source.spacing(i), p.dist);
         const float alpha = p.splat_angle;
         const float cos_alpha = std::cos(alpha);
         // A point with no surface (too few neighbours for a normal) keeps the whole cone.
         const bool has_plane = glm::dot(p.normal, p.normal) > 0.0f;
         // A neighbour k texels away lies at least (k - 0.5) texel angles from `dir`.
-        const int r = std::min(max_radius, static_cast<int>(std::ceil(alpha / texel_angle + 0.5f)));
+        const int r = texel_angles.search_radius(home, alpha, max_radius);
         for (int dy = -r; dy <= r; ++dy) {
             for (int dx = -r; dx <= r; ++dx) {
                 const std::size_t t =
@@ -259,9 +384,6 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
             }
         }
     };
-    // Neighbouring points write neighbouring texels: visiting them in spatial order keeps the
-    // texel buffers in cache.
-    const bool spatial = geometry.spatial_order.size() == count;
     auto over_points = [&](const char* stage, auto&& per_point) {
         if (progress != nullptr) {
             progress->begin_stage(stage, count);
@@ -273,23 +395,13 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
                               }
                               const std::size_t end = std::min(count, (chunk + 1) * kPointChunk);
                               for (std::size_t j = chunk * kPointChunk; j < end; ++j) {
-                                  per_point(spatial ? std::size_t{geometry.spatial_order[j]} : j);
+                                  per_point(source.id(j));
                               }
                               if (progress != nullptr) {
                                   progress->advance(end - chunk * kPointChunk);
                               }
                           });
     };
-
-    // Intensity-only clouds are shown grey-scale over the cloud's intensity range.
-    float intensity_min = 0.0f;
-    float intensity_scale = 0.0f;
-    if (!cloud.has_colors() && !cloud.intensities.empty()) {
-        const auto [lo, hi] =
-            std::minmax_element(cloud.intensities.begin(), cloud.intensities.end());
-        intensity_min = *lo;
-        intensity_scale = *hi > *lo ? 1.0f / (*hi - *lo) : 0.0f;
-    }
 
     // Pass 1: the nearest surface depth per texel.
     std::vector<std::uint32_t> front(texels, ordered_bits(kEmptyDistance));
@@ -308,29 +420,30 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
         0.5f * static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(n);
     std::vector<std::uint64_t> winner(texels, kNoPoint);
     std::vector<ColourSum> colour_sums(texels);
-    const auto colour_of = [&](std::size_t i) {
-        if (cloud.has_colors()) {
-            return cloud.colors[i];
-        }
-        if (!cloud.intensities.empty()) {
-            return glm::vec3((cloud.intensities[i] - intensity_min) * intensity_scale);
-        }
-        return glm::vec3(0.5f);
-    };
     over_points("splatting points: colour", [&](std::size_t i) {
-        const float thickness = geometry.spacing[i];
-        const glm::vec3 rgb = colour_of(i);
+        const float thickness = source.spacing(i);
+        const glm::vec3 rgb = source.colour(i);
         for_each_splat_texel(i, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
             const float depth = surfel_depth(p, hit);
             const float nearest = std::bit_cast<float>(front[t]);
             if (depth > nearest + std::max(thickness, 1e-3f * nearest)) {
                 return;
             }
+            // A cell surfel is as thick as its cell, so the far side of a thin object can lie
+            // within it of the near side: one whose known normal faces away from the probe is
+            // that far side. It gives no colour, and wins a texel only where no surfel facing
+            // the probe reaches it (the top bit orders it last).
+            const bool far_side =
+                source.is_cell_surfel(i) && source.oriented(i) && p.normal_v > 0.0f;
             const float off_centre = std::max(0.0f, 1.0f - glm::dot(directions[t], p.dir));
-            keep_smaller(winner[t], (static_cast<std::uint64_t>(ordered_bits(off_centre)) << 32) |
-                                        static_cast<std::uint32_t>(i));
-            colour_sums[t].add(rgb,
-                               texel_colour_weight(off_centre, half_texel_angle, p.splat_angle));
+            keep_smaller(winner[t],
+                         (far_side ? kFarSide : std::uint64_t{0}) |
+                             (static_cast<std::uint64_t>(ordered_bits(off_centre)) << 32) |
+                             static_cast<std::uint32_t>(i));
+            if (!far_side) {
+                colour_sums[t].add(
+                    rgb, texel_colour_weight(off_centre, half_texel_angle, p.splat_angle));
+            }
         });
     });
 
@@ -340,7 +453,7 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
             return;
         }
         const std::size_t i = static_cast<std::uint32_t>(winner[t] & 0xffffffffu);
-        const glm::vec3 rgb = colour_sums[t].mean(colour_of(i));
+        const glm::vec3 rgb = colour_sums[t].mean(source.colour(i));
         Surfel p;
         (void)surfel_of(i, p); // a winner was splatted, so it has a direction
         map.set_surface(t, surfel_depth(p, plane_hit(p, directions[t])), rgb, p.normal, 1.0f);
@@ -350,6 +463,33 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     }
     fill_small_holes(map, settings.hole_fill_texels);
     return map;
+}
+
+} // namespace
+
+ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geometry,
+                               const glm::dvec3& centre, const BakeSettings& settings,
+                               Progress* progress) {
+    check_bake_arguments(settings, cloud.size(), geometry, centre);
+    return bake_from(CloudPoints(cloud, geometry), centre, settings, progress);
+}
+
+ProbeMap bake_probe_from_hierarchy(const PointCloud& cloud, const LocalGeometry& geometry,
+                                   const PointHierarchy& hierarchy, const glm::dvec3& centre,
+                                   const BakeSettings& settings, Progress* progress) {
+    check_bake_arguments(settings, cloud.size(), geometry, centre);
+    if (hierarchy.order.size() != cloud.size()) {
+        throw InputError("bake: the point hierarchy does not belong to this cloud");
+    }
+    if (!(settings.lod_texels > 0.0f) || hierarchy.levels.empty()) {
+        return bake_from(CloudPoints(cloud, geometry), centre, settings, progress);
+    }
+    const float texel_angle =
+        static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(settings.resolution);
+    const HierarchyCut cut =
+        cut_for_probe(hierarchy, centre, texel_angle, settings.lod_texels, progress);
+    const PointColours colours(cloud);
+    return bake_from(CutPoints{cloud, geometry, colours, cut}, centre, settings, progress);
 }
 
 } // namespace lfprobe

@@ -371,7 +371,8 @@ json splat_settings_json(const BakeSettings& settings) {
                 {"splat_plane_reach", settings.splat_plane_reach},
                 {"max_splat_radius_texels", settings.max_splat_radius_texels},
                 {"hole_fill_texels", settings.hole_fill_texels},
-                {"min_distance", settings.min_distance}};
+                {"min_distance", settings.min_distance},
+                {"lod_texels", settings.lod_texels}};
 }
 
 BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,
@@ -388,6 +389,11 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
     const auto start = std::chrono::steady_clock::now();
     const LocalGeometry geometry = estimate_local_geometry(cloud, geometry_options, progress);
     const double normals_seconds = seconds_since(start);
+    const auto hierarchy_start = std::chrono::steady_clock::now();
+    const PointHierarchy hierarchy = settings.lod_texels > 0.0f
+                                         ? build_point_hierarchy(cloud, geometry, progress)
+                                         : PointHierarchy{};
+    const double hierarchy_seconds = seconds_since(hierarchy_start);
 
     ProbeSetManifest manifest;
     manifest.world_offset = cloud.world_offset;
@@ -402,11 +408,16 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
     BakeSummary summary = write_probe_set(
         folder, std::move(manifest),
         [&](std::size_t i) {
+            if (settings.lod_texels > 0.0f) {
+                return bake_probe_from_hierarchy(cloud, geometry, hierarchy, placement.positions[i],
+                                                 settings, progress);
+            }
             return bake_probe_from_cloud(cloud, geometry, placement.positions[i], settings,
                                          progress);
         },
         progress);
     summary.normals_seconds = normals_seconds;
+    summary.hierarchy_seconds = hierarchy_seconds;
     return summary;
 }
 

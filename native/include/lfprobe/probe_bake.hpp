@@ -9,6 +9,7 @@
 
 #include "lfprobe/local_geometry.hpp"
 #include "lfprobe/point_cloud.hpp"
+#include "lfprobe/point_hierarchy.hpp"
 #include "lfprobe/probe_map.hpp"
 #include "lfprobe/progress.hpp"
 
@@ -33,6 +34,10 @@ struct BakeSettings {
     int hole_fill_texels = 4;
     // Points nearer than this to the probe centre are skipped (no direction to speak of).
     float min_distance = 1e-4f;
+    // Baking from the point hierarchy (bake_probe_from_hierarchy): a cell's surfels stand in
+    // for its points where they are at most this many texels apart as the probe sees them;
+    // 0 bakes every point.
+    float lod_texels = 1.0f;
 };
 
 // Bakes one probe at `centre` (local frame). `geometry` comes from estimate_local_geometry on
@@ -40,6 +45,15 @@ struct BakeSettings {
 [[nodiscard]] ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geometry,
                                              const glm::dvec3& centre, const BakeSettings& settings,
                                              Progress* progress = nullptr);
+
+// Bakes one probe from the cut of `hierarchy` (built from the same cloud and geometry) that its
+// resolution needs (settings.lod_texels): the cost follows the probe's texels, not the cloud's
+// points, and far surfaces bake from colours averaged over about a texel. With lod_texels 0
+// it is bake_probe_from_cloud, bit for bit.
+[[nodiscard]] ProbeMap
+bake_probe_from_hierarchy(const PointCloud& cloud, const LocalGeometry& geometry,
+                          const PointHierarchy& hierarchy, const glm::dvec3& centre,
+                          const BakeSettings& settings, Progress* progress = nullptr);
 
 // Fills holes of at most settings.hole_fill_texels texels across by pull-push over the measured
 // texels, marking them inferred (confidence 0.5 per pyramid level climbed); other texels with no

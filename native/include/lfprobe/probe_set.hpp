@@ -63,8 +63,9 @@ struct BakeSummary {
     std::string folder;
     std::size_t probe_count = 0;
     double normals_seconds = 0.0;
-    double bake_seconds = 0.0;  // all probes, splatting and hole filling
-    double write_seconds = 0.0; // EXR encoding and writing
+    double hierarchy_seconds = 0.0; // building the point hierarchy, once per bake
+    double bake_seconds = 0.0;      // all probes, splatting and hole filling
+    double write_seconds = 0.0;     // EXR encoding and writing
     ProbeCoverage mean_coverage;
     std::size_t bytes_in_memory_per_probe = 0;
     std::size_t bytes_on_disk = 0;

@@ -1,0 +1,344 @@
+#include "lfprobe/point_hierarchy.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <utility>
+#include <vector>
+
+#include <glm/common.hpp>
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
+
+#include "lfprobe/error.hpp"
+#include "lfprobe/morton.hpp"
+#include "lfprobe/point_colours.hpp"
+
+namespace lfprobe {
+
+namespace {
+
+constexpr int kFacings = 7;
+constexpr std::uint8_t kNoFacing = 6;
+// The coarsest level's cells are a sixteenth of the cube: few enough to visit every one for
+// each probe, fine enough that a probe's own cell is small.
+constexpr int kTopCellsPerAxisLog2 = 4;
+// The finest level's cells are about the median point spacing: a cell of the level above
+// already stands for a handful of points.
+constexpr float kFinestCellSpacings = 1.0f;
+constexpr std::size_t kCellChunk = 4096;
+
+// Which of the six axis facings a normal has; unoriented normals (arbitrary sign) are turned
+// to the positive side of their dominant axis first, so both signs of one surface meet.
+std::uint8_t facing_of(glm::vec3 normal, bool oriented) {
+    const glm::vec3 a = glm::abs(normal);
+    if (!(a.x + a.y + a.z > 0.0f)) {
+        return kNoFacing;
+    }
+    const int axis = a.x >= a.y && a.x >= a.z ? 0 : (a.y >= a.z ? 1 : 2);
+    const bool negative = normal[axis] < 0.0f;
+    return static_cast<std::uint8_t>(2 * axis + (negative && oriented ? 1 : 0));
+}
+
+// Sums of one facing of one cell, in double: the sums run in a fixed order (the points' or the
+// children's), so the hierarchy is the same for any thread count.
+struct FacingSum {
+    glm::dvec3 position{0.0};
+    glm::dvec3 normal{0.0};
+    glm::dvec3 colour{0.0};
+    double spacing = 0.0;
+    std::uint64_t count = 0;
+    std::uint64_t oriented = 0;
+
+    void add(const glm::vec3& p, const glm::vec3& n, const glm::vec3& c, float s, bool o,
+             std::uint64_t weight) {
+        const auto w = static_cast<double>(weight);
+        position += w * glm::dvec3(p);
+        normal += w * glm::dvec3(n);
+        colour += w * glm::dvec3(c);
+        spacing += w * static_cast<double>(s);
+        count += weight;
+        oriented += o ? weight : 0;
+    }
+    [[nodiscard]] CellSurfel surfel(std::uint8_t facing, float min_spacing) const {
+        CellSurfel s;
+        const double inv = 1.0 / static_cast<double>(count);
+        s.position = glm::vec3(position * inv);
+        const double length = glm::length(normal);
+        s.normal = length > 1e-9 * static_cast<double>(count) ? glm::vec3(normal / length)
+                                                              : glm::vec3(0.0f);
+        s.colour = glm::vec3(colour * inv);
+        s.spacing = std::max(static_cast<float>(spacing * inv), min_spacing);
+        s.count = static_cast<std::uint32_t>(
+            std::min<std::uint64_t>(count, std::numeric_limits<std::uint32_t>::max()));
+        s.facing = facing;
+        s.oriented = oriented == count ? 1 : 0;
+        return s;
+    }
+};
+
+// Fills a level's surfels: per cell, `visit(cell, add)` adds the cell's members, and the
+// non-empty facings become the cell's surfels in facing order. Cells are processed in chunks
+// on all cores and the chunks joined in order.
+template <class VisitCell>
+void fill_surfels(PointHierarchy::Level& level, VisitCell&& visit, Progress* progress) {
+    const std::size_t cells = level.cell_count();
+    const std::size_t chunks = (cells + kCellChunk - 1) / kCellChunk;
+    std::vector<std::vector<CellSurfel>> chunk_surfels(chunks);
+    std::vector<std::uint32_t> per_cell(cells, 0);
+    const float min_spacing = kCellSurfelSpacing * level.cell_size;
+    tbb::parallel_for(std::size_t{0}, chunks, [&](std::size_t chunk) {
+        if (progress != nullptr) {
+            progress->throw_if_cancelled();
+        }
+        const std::size_t end = std::min(cells, (chunk + 1) * kCellChunk);
+        std::vector<CellSurfel>& out = chunk_surfels[chunk];
+        for (std::size_t c = chunk * kCellChunk; c < end; ++c) {
+            std::array<FacingSum, kFacings> sums{};
+            visit(c, sums);
+            for (std::uint8_t f = 0; f < kFacings; ++f) {
+                if (sums[f].count > 0) {
+                    out.push_back(sums[f].surfel(f, min_spacing));
+                    ++per_cell[c];
+                }
+            }
+        }
+    });
+    level.first_surfel.assign(cells + 1, 0);
+    for (std::size_t c = 0; c < cells; ++c) {
+        level.first_surfel[c + 1] = level.first_surfel[c] + per_cell[c];
+    }
+    level.surfels.reserve(level.first_surfel[cells]);
+    for (const std::vector<CellSurfel>& part : chunk_surfels) {
+        level.surfels.insert(level.surfels.end(), part.begin(), part.end());
+    }
+}
+
+// The cells of keys >> (3·shift) over sorted `keys`: their keys and the runs they start.
+void split_runs(const std::vector<std::uint64_t>& keys, int shift,
+                std::vector<std::uint64_t>& cell_keys, std::vector<std::uint32_t>& first) {
+    cell_keys.clear();
+    first.clear();
+    const int bits = 3 * shift;
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+        const std::uint64_t k = keys[i] >> bits;
+        if (cell_keys.empty() || cell_keys.back() != k) {
+            cell_keys.push_back(k);
+            first.push_back(static_cast<std::uint32_t>(i));
+        }
+    }
+    first.push_back(static_cast<std::uint32_t>(keys.size()));
+}
+
+float median_spacing(const std::vector<float>& spacing) {
+    const std::size_t step = std::max<std::size_t>(1, spacing.size() / 8192);
+    std::vector<float> sample;
+    for (std::size_t i = 0; i < spacing.size(); i += step) {
+        if (spacing[i] > 0.0f && std::isfinite(spacing[i])) {
+            sample.push_back(spacing[i]);
+        }
+    }
+    if (sample.empty()) {
+        return 0.0f;
+    }
+    std::nth_element(sample.begin(), sample.begin() + sample.size() / 2, sample.end());
+    return sample[sample.size() / 2];
+}
+
+} // namespace
+
+std::size_t PointHierarchy::memory_bytes() const {
+    std::size_t bytes = order.size() * sizeof(std::uint32_t);
+    for (const Level& level : levels) {
+        bytes += level.cell_keys.size() * sizeof(std::uint64_t) +
+                 (level.first_point.size() + level.first_child.size() + level.first_surfel.size()) *
+                     sizeof(std::uint32_t) +
+                 level.surfels.size() * sizeof(CellSurfel);
+    }
+    return bytes;
+}
+
+std::size_t PointHierarchy::surfel_count() const {
+    std::size_t count = 0;
+    for (const Level& level : levels) {
+        count += level.surfels.size();
+    }
+    return count;
+}
+
+PointHierarchy build_point_hierarchy(const PointCloud& cloud, const LocalGeometry& geometry,
+                                     Progress* progress) {
+    const std::size_t n = cloud.size();
+    if (geometry.normals.size() != n || geometry.spacing.size() != n ||
+        geometry.oriented.size() != n) {
+        throw InputError("point hierarchy: local geometry does not belong to this cloud");
+    }
+    if (n > std::numeric_limits<std::uint32_t>::max()) {
+        throw InputError("point hierarchy: at most 2^32-1 points per cloud");
+    }
+    PointHierarchy h;
+    if (n == 0) {
+        return h;
+    }
+    if (progress != nullptr) {
+        progress->begin_stage("building the point hierarchy", 1);
+    }
+    glm::vec3 lo(std::numeric_limits<float>::max());
+    glm::vec3 hi(std::numeric_limits<float>::lowest());
+    for (const glm::vec3& p : cloud.positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    const glm::vec3 extent = hi - lo;
+    h.origin = lo;
+    h.cube_size = std::max({extent.x, extent.y, extent.z, 1e-6f}) * (1.0f + 1e-6f);
+    const auto base_cells = static_cast<float>(1u << morton::kBitsPerAxis);
+    const float base_cell = h.cube_size / base_cells;
+
+    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
+        const glm::vec3 q = (cloud.positions[i] - lo) / h.cube_size * base_cells;
+        const auto cell = [&](int a) {
+            return static_cast<std::uint64_t>(std::clamp(q[a], 0.0f, base_cells - 1.0f));
+        };
+        keyed[i] = {morton::key(cell(0), cell(1), cell(2)), static_cast<std::uint32_t>(i)};
+    });
+    tbb::parallel_sort(keyed.begin(), keyed.end());
+    if (progress != nullptr) {
+        progress->throw_if_cancelled();
+    }
+    std::vector<std::uint64_t> keys(n);
+    h.order.resize(n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t j) {
+        keys[j] = keyed[j].first;
+        h.order[j] = keyed[j].second;
+    });
+    keyed = {};
+
+    // Levels from cells of about two point spacings up to a sixteenth of the cube.
+    const float spacing = median_spacing(geometry.spacing);
+    const int top_shift = morton::kBitsPerAxis - kTopCellsPerAxisLog2;
+    int finest_shift = top_shift + 1; // no level: the cloud is too sparse for its extent
+    if (spacing > 0.0f) {
+        const float cells = kFinestCellSpacings * spacing / base_cell;
+        finest_shift = std::max(1, static_cast<int>(std::ceil(std::log2(std::max(cells, 1.0f)))));
+    }
+    const PointColours colour_of(cloud);
+    for (int shift = finest_shift; shift <= top_shift; ++shift) {
+        PointHierarchy::Level level;
+        level.shift = shift;
+        level.cell_size = base_cell * static_cast<float>(1u << shift);
+        if (h.levels.empty()) {
+            split_runs(keys, shift, level.cell_keys, level.first_point);
+            fill_surfels(
+                level,
+                [&](std::size_t c, std::array<FacingSum, kFacings>& sums) {
+                    for (std::uint32_t j = level.first_point[c]; j < level.first_point[c + 1];
+                         ++j) {
+                        const std::uint32_t i = h.order[j];
+                        const bool oriented = geometry.oriented[i] != 0;
+                        glm::vec3 normal = geometry.normals[i];
+                        const std::uint8_t f = facing_of(normal, oriented);
+                        // An unoriented normal joins its facing with the facing's sign.
+                        if (!oriented && f != kNoFacing && normal[f / 2] < 0.0f) {
+                            normal = -normal;
+                        }
+                        sums[f].add(cloud.positions[i], normal, colour_of(i), geometry.spacing[i],
+                                    oriented, 1);
+                    }
+                },
+                progress);
+        } else {
+            const PointHierarchy::Level& below = h.levels.back();
+            split_runs(below.cell_keys, 1, level.cell_keys, level.first_child);
+            level.first_point.resize(level.first_child.size());
+            for (std::size_t c = 0; c < level.first_child.size(); ++c) {
+                level.first_point[c] = below.first_point[level.first_child[c]];
+            }
+            fill_surfels(
+                level,
+                [&](std::size_t c, std::array<FacingSum, kFacings>& sums) {
+                    for (std::uint32_t k = below.first_surfel[level.first_child[c]];
+                         k < below.first_surfel[level.first_child[c + 1]]; ++k) {
+                        const CellSurfel& s = below.surfels[k];
+                        sums[s.facing].add(s.position, s.normal, s.colour, s.spacing,
+                                           s.oriented != 0, s.count);
+                    }
+                },
+                progress);
+        }
+        // Each level's cell keys are the finest keys >> 3·shift, its cells' Morton keys.
+        h.levels.push_back(std::move(level));
+    }
+    return h;
+}
+
+namespace {
+
+// Distance from `p` to the axis-aligned box [lo, lo + size]³.
+float box_distance(const glm::vec3& p, const glm::vec3& lo, float size) {
+    const glm::vec3 d = glm::max(glm::max(lo - p, p - (lo + glm::vec3(size))), glm::vec3(0.0f));
+    return glm::length(d);
+}
+
+void collect(const PointHierarchy& h, std::size_t level_index, std::size_t cell,
+             const glm::vec3& centre, float reach, HierarchyCut& out) {
+    const PointHierarchy::Level& level = h.levels[level_index];
+    const glm::u64vec3 c = morton::cell(level.cell_keys[cell]);
+    const glm::vec3 lo = h.origin + glm::vec3(c) * level.cell_size;
+    const float d = box_distance(centre, lo, level.cell_size);
+    // One surfel per facing and cell: at most lod_texels texels apart at d?
+    if (level.cell_size <= reach * d) {
+        out.surfels.insert(out.surfels.end(), level.surfels.begin() + level.first_surfel[cell],
+                           level.surfels.begin() + level.first_surfel[cell + 1]);
+        return;
+    }
+    if (level_index == 0) {
+        out.points.insert(out.points.end(), h.order.begin() + level.first_point[cell],
+                          h.order.begin() + level.first_point[cell + 1]);
+        return;
+    }
+    for (std::uint32_t child = level.first_child[cell]; child < level.first_child[cell + 1];
+         ++child) {
+        collect(h, level_index - 1, child, centre, reach, out);
+    }
+}
+
+} // namespace
+
+HierarchyCut cut_for_probe(const PointHierarchy& hierarchy, const glm::dvec3& centre,
+                           float texel_angle, float lod_texels, Progress* progress) {
+    HierarchyCut cut;
+    if (hierarchy.levels.empty() || !(lod_texels > 0.0f)) {
+        cut.points = hierarchy.order;
+        return cut;
+    }
+    const PointHierarchy::Level& top = hierarchy.levels.back();
+    const glm::vec3 c(centre);
+    const float reach = lod_texels * texel_angle;
+    std::vector<HierarchyCut> parts(top.cell_count());
+    tbb::parallel_for(std::size_t{0}, top.cell_count(), [&](std::size_t cell) {
+        if (progress != nullptr) {
+            progress->throw_if_cancelled();
+        }
+        collect(hierarchy, hierarchy.levels.size() - 1, cell, c, reach, parts[cell]);
+    });
+    std::size_t points = 0;
+    std::size_t surfels = 0;
+    for (const HierarchyCut& part : parts) {
+        points += part.points.size();
+        surfels += part.surfels.size();
+    }
+    cut.points.reserve(points);
+    cut.surfels.reserve(surfels);
+    for (const HierarchyCut& part : parts) {
+        cut.points.insert(cut.points.end(), part.points.begin(), part.points.end());
+        cut.surfels.insert(cut.surfels.end(), part.surfels.begin(), part.surfels.end());
+    }
+    return cut;
+}
+
+} // namespace lfprobe
