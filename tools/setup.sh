@@ -23,6 +23,10 @@ if [ ${#missing[@]} -gt 0 ]; then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
+# E57 and LAS/LAZ import (optional: without them the other formats work and those files are
+# refused with a message saying to run this).
+bash "$root/tools/scan_deps.sh" || echo "lfprobe setup: could not install the E57/LAS libraries (tools/scan_deps.sh); E57 and LAS/LAZ import stays off" >&2
+
 build="${LFPROBE_BUILD_DIR:-$root/build}"
 werror=OFF
 [ "${LFPROBE_WERROR:-0}" = "1" ] && werror=ON

@@ -8,7 +8,8 @@ from typing import Callable, Optional, Sequence
 
 from . import defaults, native
 from .probe_set import read_manifest
-from .sources import default_cache_dir, describe_mesh, describe_scan
+from .scan_merge import describe_records, load_cloud
+from .sources import default_cache_dir, describe_mesh
 
 Progress = Optional[Callable[[float, str], object]]
 
@@ -88,21 +89,28 @@ def load_scans(
     world_offset: Optional[Sequence[float]] = None,
     progress: Progress = None,
 ):
-    """Reads and merges scan files into one native PointCloud (cached; see default_cache_dir).
-    scanners: world positions, one per file, or none."""
-    _native = native.load()
-    if scanners and len(scanners) != len(paths):
-        raise ValueError(
-            f"{len(scanners)} scanner positions for {len(paths)} scan files: give one per file"
-        )
-    return _native.load_scans(
-        [str(p) for p in paths],
-        scanners=[list(map(float, s)) for s in scanners],
-        world_offset=None if world_offset is None else list(map(float, world_offset)),
-        columns=columns,
-        cache_dir=default_cache_dir() if cache_dir is None else cache_dir,
-        progress=progress,
+    """Reads and merges scan files into one native PointCloud (native formats through the parse
+    cache, see default_cache_dir; E57 and LAS/LAZ through their libraries, core/scan_formats.py).
+    scanners: world positions, one per file (None: the file's own), or none; for one merged
+    .xyz/.pts/.ply export, one per station it holds (core/scan_merge.py)."""
+    return load_scans_and_sources(paths, scanners, columns, cache_dir, world_offset, progress)[0]
+
+
+def load_scans_and_sources(
+    paths: Sequence[str],
+    scanners: Sequence[Sequence[float]] = (),
+    columns: str = "",
+    cache_dir: Optional[str] = None,
+    world_offset: Optional[Sequence[float]] = None,
+    progress: Progress = None,
+):
+    """load_scans, and the manifest's sources: one record per scan index (a file, an E57
+    station, a station of a merged export)."""
+    cloud, records = load_cloud(
+        [str(p) for p in paths], list(scanners), columns,
+        default_cache_dir() if cache_dir is None else cache_dir, world_offset, progress,
     )
+    return cloud, records
 
 
 def bake_from_cloud(
@@ -159,13 +167,8 @@ def bake_from_scans(
 ) -> dict:
     """Scan files → probe set folder. Returns the bake summary with the cloud's size and offset."""
     placement.validate()
-    cloud = load_scans(scan_paths, scanners, columns, cache_dir, progress=progress)
-    sources = []
-    for path, scan in zip(scan_paths, cloud.scans):
-        offset = cloud.world_offset
-        scanner = scan["scanner"]
-        world_scanner = None if scanner is None else [s + o for s, o in zip(scanner, offset)]
-        sources.append(describe_scan(path, scan["points"], world_scanner))
+    cloud, records = load_scans_and_sources(scan_paths, scanners, columns, cache_dir, progress=progress)
+    sources = describe_records(records)
     summary = bake_from_cloud(cloud, out_dir, placement, options, sources, progress)
     summary["points"] = len(cloud)
     summary["world_offset"] = list(cloud.world_offset)

@@ -17,13 +17,14 @@ def file_sha256(path: str, chunk: int = 1 << 22) -> str:
     return digest.hexdigest()
 
 
-def describe_scan(path: str, points: int, scanner) -> dict:
-    """The manifest's record of one scan file."""
+def describe_scan(path: str, points: int, scanner, sha256: str | None = None) -> dict:
+    """The manifest's record of one scan file (sha256: the file's hash when already known, as
+    for the second station of an E57)."""
     return {
         "kind": "scan",
         "path": os.path.abspath(path),
         "bytes": os.path.getsize(path),
-        "sha256": file_sha256(path),
+        "sha256": sha256 or file_sha256(path),
         "points": int(points),
         "scanner": list(scanner) if scanner is not None else None,
     }

@@ -16,10 +16,20 @@ def triples(values: Optional[List[List[float]]], option: str) -> List[List[float
     return [flat[i : i + 3] for i in range(0, len(flat), 3)]
 
 
+SCAN_HELP = (".xyz/.txt/.pts/.ply (native readers), .e57 (every station, posed; needs pye57) and "
+             ".las/.laz (needs laspy, lazrs): merged into one cloud, one scan per file or E57 station")
+SCANNER_HELP = ("scanner positions X Y Z (world coordinates): one per scan file (an E57's stations carry "
+                "their own), or, for ONE merged .xyz/.pts/.ply export, one per station it holds: each "
+                "point then gets the station named by its --columns `station` column if given, else "
+                "the NEAREST station (no line-of-sight test yet)")
+COLUMNS_HELP = ('text scans: column names, e.g. "x y z i r g b"; `station` names a merged export\'s '
+                "station column (0-based, or 1..N, in --scanner order)")
+
+
 def add_placement_arguments(parser: argparse.ArgumentParser) -> None:
     """Where the scanners stood and where the probes go, shared by `bake` and `place`."""
     parser.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X",
-                        help="scanner positions X Y Z, one per scan file (world coordinates)")
+                        help=SCANNER_HELP)
     parser.add_argument("--probe", nargs="+", type=float, action="append", metavar="X",
                         help="probe positions X Y Z [X Y Z ...] (world coordinates)")
     parser.add_argument("--grid-min", nargs=3, type=float, metavar=("X", "Y", "Z"))

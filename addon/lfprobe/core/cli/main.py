@@ -19,7 +19,8 @@ from ..pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh, bake_fro
 from ..probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
 from ..probe_storage import describe as describe_storage
 from ..progress import TerminalProgress
-from .arguments import add_placement_arguments, add_plan_arguments, add_storage_arguments, bake_storage, plan_options, triples
+from .arguments import (COLUMNS_HELP, SCAN_HELP, add_placement_arguments, add_plan_arguments, add_storage_arguments,
+                        bake_storage, plan_options, triples)
 
 
 def _mib(n: float) -> str:
@@ -231,7 +232,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     bake = sub.add_parser("bake", help="bake a probe set from scan files or a mesh")
     source = bake.add_mutually_exclusive_group(required=True)
-    source.add_argument("--scan", nargs="+", metavar="FILE", help=".xyz/.txt/.pts/.ply scans, merged")
+    source.add_argument("--scan", nargs="+", metavar="FILE", help=SCAN_HELP)
     source.add_argument("--mesh", nargs="+", metavar="FILE",
                         help="an .obj (+.mtl) or .ply mesh, baked with Embree (exact distances)")
     bake.add_argument("--supersample", type=int, default=None, metavar="N",
@@ -240,7 +241,7 @@ def build_parser() -> argparse.ArgumentParser:
     add_placement_arguments(bake)
     bake.add_argument("--res", type=int, default=defaults.bake("resolution"), help="octahedral map resolution N (N×N texels)")
     bake.add_argument("--out", required=True, metavar="DIR", help="probe set folder to write")
-    bake.add_argument("--columns", help='text scans: column names, e.g. "x y z i r g b"')
+    bake.add_argument("--columns", help=COLUMNS_HELP)
     bake.add_argument("--cache", default=None, metavar="DIR", help="parsed-scan cache folder")
     bake.add_argument("--no-cache", action="store_true", help="parse the scans without the cache")
     bake.add_argument("--splat-scale", type=float, default=defaults.bake("splat_scale"), help="splat radius / point spacing")
@@ -284,11 +285,11 @@ def build_parser() -> argparse.ArgumentParser:
     render.set_defaults(run=_cmd_render)
 
     splat = sub.add_parser("splat", help="render the raw cloud as z-buffered splats (baseline)")
-    splat.add_argument("--scan", nargs="+", required=True, metavar="FILE")
+    splat.add_argument("--scan", nargs="+", required=True, metavar="FILE", help=SCAN_HELP)
     splat.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X")
     splat.add_argument("--camera", required=True, metavar="CAM.json")
     splat.add_argument("--out", required=True, metavar="IMG.exr")
-    splat.add_argument("--columns")
+    splat.add_argument("--columns", help=COLUMNS_HELP)
     splat.add_argument("--cache", default=None, metavar="DIR")
     splat.add_argument("--no-cache", action="store_true")
     splat.add_argument("--radius-scale", type=float, default=0.8, help="splat half size / spacing")

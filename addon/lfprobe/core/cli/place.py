@@ -12,7 +12,8 @@ from collections import Counter
 from ..atomic_write import atomic_open
 from ..pipeline import ProbePlacementSpec, load_scans, plan_probes
 from ..progress import TerminalProgress
-from .arguments import add_placement_arguments, add_plan_arguments, add_storage_arguments, bake_storage, plan_options, triples
+from .arguments import (COLUMNS_HELP, SCAN_HELP, add_placement_arguments, add_plan_arguments, add_storage_arguments,
+                        bake_storage, plan_options, triples)
 
 
 def read_view_cameras(paths) -> list:
@@ -145,9 +146,9 @@ def add_parsers(sub) -> None:
                     "the view with the most UNKNOWN pixels, again and again, until every view is at "
                     "most --target-unknown UNKNOWN or the next probe would exceed --budget-mib; the "
                     "probe set goes to --out-probes.")
-    place.add_argument("--scan", nargs="+", required=True, metavar="FILE")
+    place.add_argument("--scan", nargs="+", required=True, metavar="FILE", help=SCAN_HELP)
     add_placement_arguments(place)
-    place.add_argument("--columns", help='text scans: column names, e.g. "x y z i r g b"')
+    place.add_argument("--columns", help=COLUMNS_HELP)
     place.add_argument("--cache", default=None, metavar="DIR", help="parsed-scan cache folder")
     place.add_argument("--no-cache", action="store_true")
     place.add_argument("--out", metavar="PLAN.json", help="also write the plan as JSON")
