@@ -13,6 +13,7 @@ import time
 import numpy as np
 
 from . import native
+from .bench_formats import library_parse_benchmark
 from .probe_set import PAPER_BYTES_PER_2048_PROBE, coarse_level_bytes, summarize
 
 # The project's shared test data: LFPROBE_SHARED_DATA, else ../shared/data beside the checkout.
@@ -204,6 +205,9 @@ def main(args) -> int:
             )
         results["parsing"] = rows
         os.remove(generated)
+
+        print("\n== E57 and LAS/LAZ: lfprobe's readers vs the libraries' own, same file, this run ==")
+        results["parsing_library_formats"] = library_parse_benchmark(os.path.dirname(pump), tmp)
 
         print(f"\n== bake: {args.points:,} points, {args.res}² probes ==")
         b = bake_benchmark(args.points, args.res, tmp)

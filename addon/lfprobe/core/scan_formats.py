@@ -28,7 +28,8 @@ LIBRARY_EXTENSIONS = E57_EXTENSIONS + LAS_EXTENSIONS
 NATIVE_EXTENSIONS = (".xyz", ".txt", ".asc", ".csv", ".pts", ".ply")
 ALL_EXTENSIONS = NATIVE_EXTENSIONS + LIBRARY_EXTENSIONS
 
-_CHECKOUT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+# realpath: Blender may load the add-on through a link to the checkout's addon/lfprobe.
+_CHECKOUT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.realpath(__file__)))))
 
 
 class MissingLibraryError(InputError):

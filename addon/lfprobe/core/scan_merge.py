@@ -288,3 +288,29 @@ def describe_records(records: Sequence[ScanRecord]) -> list:
         entry.update(record.metadata)
         out.append(entry)
     return out
+
+
+def loaded_with_records(result, paths: Sequence[str]):
+    """(cloud, records) from what a load job returned: load_cloud's pair as it is, or a native
+    load_scans cloud (one scan per file) with its records made here."""
+    if isinstance(result, tuple):
+        return result
+    offset = np.asarray(result.world_offset, dtype=np.float64)
+    return result, [ScanRecord(str(p), int(s["points"]),
+                               None if s["scanner"] is None else [float(v) for v in np.asarray(s["scanner"]) + offset])
+                    for p, s in zip(paths, result.scans)]
+
+
+def file_of_each_scan(records: Sequence[ScanRecord], paths: Sequence[str]) -> List[int]:
+    """The index in `paths` of the file each scan index came from (an E57 or a merged export
+    gives several scans of one file, in file order)."""
+    out, current = [], -1
+    for record in records:
+        if current < 0 or str(paths[current]) != record.path or record.metadata.get("station", 0) == 0:
+            current += 1
+            while current < len(paths) and str(paths[current]) != record.path:
+                current += 1
+            if current >= len(paths):
+                raise ValueError(f"{record.path}: not among the files loaded")
+        out.append(current)
+    return out

@@ -55,6 +55,22 @@ def object_groups(paths: Sequence[str], scans: Sequence[dict], point_count: int,
     return [([p], np.flatnonzero(scan_index == i), [scans[i]["scanner"]]) for i, p in enumerate(paths)]
 
 
+def file_scanners(scans: Sequence[dict], file_of_scan: Sequence[int], files: int) -> list:
+    """One scanner per file (the cloud's frame) from the cloud's scans: a file's only scan's
+    scanner, None for a file of several stations (an E57), whose poses stay in the file."""
+    out: list = [None] * files
+    counts = [0] * files
+    for scan, f in zip(scans, file_of_scan):
+        counts[f] += 1
+        out[f] = scan["scanner"] if counts[f] == 1 else None
+    return out
+
+
+def file_of_each_point(file_of_scan: Sequence[int], scan_index: np.ndarray) -> np.ndarray:
+    """The file index of every point, from its scan index (object_groups' grouping by file)."""
+    return np.asarray(file_of_scan, dtype=np.uint32)[np.asarray(scan_index)]
+
+
 def object_points(positions: np.ndarray, colors: Optional[np.ndarray], members: np.ndarray,
                   display_limit: int) -> tuple:
     """(bounds (min, max), displayed positions, displayed colours or None) of one object's

@@ -19,11 +19,13 @@ from ...core.cloud_transform import to_world, transform_scans
 from ...core.errors import InputError
 from ...core import probe_storage
 from ...core.probe_set import read_manifest, record_in_bake
-from ...core.sources import default_cache_dir, describe_scan
+from ...core.scan_formats import is_library_format
+from ...core.scan_merge import describe_records, file_of_each_scan, loaded_with_records
+from ...core.sources import default_cache_dir
 from .. import grid as grid_module
 from .. import scan_object
 from . import job_modal
-from .job_modal import NativeJobOperator
+from .job_modal import NativeJobOperator, ThreadJob
 
 
 class BakeInputError(InputError):
@@ -139,8 +141,15 @@ class GridBake:
                               for _ in obj.lfprobe_scan.paths()]
 
     def start_load(self):
-        """The native job that reads the scans' full clouds (through the parse cache)."""
-        # Scanner positions travel with the files (headers) or were given at import.
+        """The job that reads the scans' full clouds: the native one (through the parse cache),
+        or, with E57 or LAS/LAZ files among them, core's loader on a thread of its own."""
+        # Scanner positions travel with the files (headers, E57 poses) or were given at import.
+        if any(is_library_format(p) for p in self.paths):
+            paths, scanners, offset = list(self.paths), list(self.scanners), list(self.offset)
+            if len(scanners) != len(paths):
+                scanners = []
+            return ThreadJob(lambda report: pipeline.load_scans_and_sources(
+                paths, scanners, world_offset=offset, cache_dir=default_cache_dir(), progress=report))
         given = (self.scanners if len(self.scanners) == len(self.paths) and all(s is not None for s in self.scanners)
                  else [])
         return native.load().start_load_scans(
@@ -149,12 +158,10 @@ class GridBake:
 
     def cloud_and_sources(self, loaded):
         """(the cloud to bake, moved by the scan objects' transforms; the manifest's sources)."""
-        cloud = transform_scans(loaded, self.file_matrices)
-        sources = [
-            describe_scan(path, scan["points"], None if scan["scanner"] is None else to_world(scan["scanner"], self.offset))
-            for path, scan in zip(self.paths, loaded.scans)
-        ]
-        return cloud, sources
+        loaded, records = loaded_with_records(loaded, self.paths)
+        files = file_of_each_scan(records, self.paths)
+        cloud = transform_scans(loaded, [self.file_matrices[f] for f in files])
+        return cloud, describe_records(records)
 
     def bind(self, staging: str) -> None:
         """Records in the staged set the grid it is baked for (grid.bound_set checks it)."""

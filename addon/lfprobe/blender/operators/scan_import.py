@@ -1,5 +1,8 @@
-"""File › Import › Scan Cloud (.xyz, .pts, .ply): reads one or several scans with the native
-readers (through lfprobe's parse cache) off the main thread and makes scan cloud objects."""
+"""File › Import › Scan Cloud (.xyz, .pts, .ply, .e57, .las, .laz): reads one or several scans
+off the main thread, with the native readers (through lfprobe's parse cache) or, for E57 and
+LAS/LAZ, through core's loader (core/scan_formats.py), and makes scan cloud objects. An E57's
+stations stay apart in the cloud (one scan per station, posed, its station the scanner); its
+object holds them all and the bake reads the stations' poses from the file again."""
 
 import os
 
@@ -7,14 +10,16 @@ import bpy
 from bpy.props import BoolProperty, CollectionProperty, FloatProperty, IntProperty, StringProperty
 from bpy_extras.io_utils import ImportHelper
 
-from ...core import native
-from ...core.scan_points import automatic_point_radius, in_shared_frame, object_groups, object_points
+from ...core import native, pipeline
+from ...core.scan_formats import ALL_EXTENSIONS, is_library_format
+from ...core.scan_merge import file_of_each_scan, loaded_with_records
+from ...core.scan_points import automatic_point_radius, file_of_each_point, file_scanners, in_shared_frame, object_groups, object_points
 from ...core.sources import default_cache_dir
 from .. import scan_object
-from .job_modal import NativeJobOperator
+from .job_modal import NativeJobOperator, ThreadJob
 from .menu_registration import classes_with_menu_entry
 
-SCAN_EXTENSIONS = (".xyz", ".pts", ".ply", ".txt", ".asc")
+SCAN_EXTENSIONS = ALL_EXTENSIONS
 def _world_scanner(scanner, offset):
     if scanner is None:
         return None
@@ -22,7 +27,7 @@ def _world_scanner(scanner, offset):
 
 
 class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator):
-    """Import laser scan point clouds (.xyz, .pts, .ply) as scan cloud objects"""
+    """Import laser scan point clouds (.xyz, .pts, .ply, .e57, .las, .laz) as scan cloud objects"""
 
     bl_idname = "import_scene.lfprobe_scan"
     bl_label = "Import Scan Cloud"
@@ -30,7 +35,7 @@ class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator
     job_label = "Scan import"
 
     filename_ext = ".xyz"
-    filter_glob: StringProperty(default="*.xyz;*.pts;*.ply;*.txt;*.asc", options={"HIDDEN"})
+    filter_glob: StringProperty(default="*.xyz;*.pts;*.ply;*.txt;*.asc;*.csv;*.e57;*.las;*.laz", options={"HIDDEN"})
     files: CollectionProperty(type=bpy.types.OperatorFileListElement, options={"HIDDEN", "SKIP_SAVE"})
     directory: StringProperty(subtype="DIR_PATH", options={"HIDDEN", "SKIP_SAVE"})
 
@@ -86,10 +91,16 @@ class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator
             self.report({"ERROR"}, str(error))
             return None
         self._import_paths = paths
+        if any(is_library_format(p) for p in paths):
+            columns = self.columns
+            return ThreadJob(lambda report: pipeline.load_scans_and_sources(
+                paths, columns=columns, cache_dir=default_cache_dir(), progress=report))
         return _native.start_load_scans(paths, columns=self.columns, cache_dir=default_cache_dir())
 
-    def finish_job(self, context, cloud):
+    def finish_job(self, context, loaded):
         paths = self._import_paths
+        cloud, records = loaded_with_records(loaded, paths)
+        files = file_of_each_scan(records, paths)
         collection = context.collection or context.scene.collection
         positions, offset, too_far = in_shared_frame(cloud.positions, cloud.world_offset,
                                                      scan_object.frame_offset(context.scene))
@@ -100,8 +111,11 @@ class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator
                 f"it keeps its own world offset {tuple(offset)}",
             )
         colors = cloud.colors
-        scans = cloud.scans
-        scan_index = cloud.scan_index if self.separate_objects and len(paths) > 1 else None
+        # One scanner per file: a file of several stations (an E57) keeps None, its own poses.
+        scans = [{"scanner": s} for s in file_scanners(cloud.scans, files, len(paths))]
+        scan_index = None
+        if self.separate_objects and len(paths) > 1:
+            scan_index = file_of_each_point(files, cloud.scan_index)
         groups = object_groups(paths, scans, len(positions), scan_index)
         created = []
         for group_paths, members, scanners in groups:
@@ -139,7 +153,7 @@ class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator
 
 
 def _menu_import(self, _context):
-    self.layout.operator(LFPROBE_OT_import_scan.bl_idname, text="Scan Cloud (.xyz, .pts, .ply)")
+    self.layout.operator(LFPROBE_OT_import_scan.bl_idname, text="Scan Cloud (.xyz, .pts, .ply, .e57, .las)")
 
 
 register, unregister = classes_with_menu_entry((LFPROBE_OT_import_scan,), "TOPBAR_MT_file_import", _menu_import)
