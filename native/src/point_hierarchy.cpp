@@ -11,7 +11,6 @@
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/morton.hpp"
@@ -186,37 +185,15 @@ PointHierarchy build_point_hierarchy(const PointCloud& cloud, const LocalGeometr
     if (progress != nullptr) {
         progress->begin_stage("building the point hierarchy", 1);
     }
-    glm::vec3 lo(std::numeric_limits<float>::max());
-    glm::vec3 hi(std::numeric_limits<float>::lowest());
-    for (const glm::vec3& p : cloud.positions) {
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
-    }
-    const glm::vec3 extent = hi - lo;
-    h.origin = lo;
-    h.cube_size = std::max({extent.x, extent.y, extent.z, 1e-6f}) * (1.0f + 1e-6f);
-    const auto base_cells = static_cast<float>(1u << morton::kBitsPerAxis);
-    const float base_cell = h.cube_size / base_cells;
-
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
-        const glm::vec3 q = (cloud.positions[i] - lo) / h.cube_size * base_cells;
-        const auto cell = [&](int a) {
-            return static_cast<std::uint64_t>(std::clamp(q[a], 0.0f, base_cells - 1.0f));
-        };
-        keyed[i] = {morton::key(cell(0), cell(1), cell(2)), static_cast<std::uint32_t>(i)};
-    });
-    tbb::parallel_sort(keyed.begin(), keyed.end());
+    morton::SortedPoints sorted = morton::sort_points(cloud.positions, geometry.spatial_order);
     if (progress != nullptr) {
         progress->throw_if_cancelled();
     }
-    std::vector<std::uint64_t> keys(n);
-    h.order.resize(n);
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t j) {
-        keys[j] = keyed[j].first;
-        h.order[j] = keyed[j].second;
-    });
-    keyed = {};
+    h.origin = sorted.origin;
+    h.cube_size = sorted.cube_size;
+    h.order = std::move(sorted.order);
+    const std::vector<std::uint64_t>& keys = sorted.keys;
+    const float base_cell = sorted.cell_size(0);
 
     // Levels from cells of about two point spacings up to a sixteenth of the cube.
     const float spacing = median_spacing(geometry.spacing);
@@ -230,7 +207,7 @@ PointHierarchy build_point_hierarchy(const PointCloud& cloud, const LocalGeometr
     for (int shift = finest_shift; shift <= top_shift; ++shift) {
         PointHierarchy::Level level;
         level.shift = shift;
-        level.cell_size = base_cell * static_cast<float>(1u << shift);
+        level.cell_size = sorted.cell_size(shift);
         if (h.levels.empty()) {
             split_runs(keys, shift, level.cell_keys, level.first_point);
             fill_surfels(

@@ -1,4 +1,4 @@
-// Per-point surface geometry estimated from the k nearest neighbours (nanoflann): the normal
+// Per-point surface geometry estimated from the k nearest neighbours: the normal
 // (PCA, the direction of least spread) oriented toward the scanner that saw the point, and the
 // local point spacing that sizes the point's splat when it is baked into a probe.
 #pragma once
@@ -30,7 +30,7 @@ struct LocalGeometry {
     std::vector<std::uint32_t> spatial_order;
 };
 
-// Indices of `positions` sorted along a Morton curve over their bounding box.
+// Indices of `positions` sorted along a Morton curve over their bounding cube.
 [[nodiscard]] std::vector<std::uint32_t> morton_order(const std::vector<glm::vec3>& positions);
 
 [[nodiscard]] LocalGeometry estimate_local_geometry(const PointCloud& cloud,

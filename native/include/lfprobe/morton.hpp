@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
@@ -42,5 +43,27 @@ inline constexpr int kBitsPerAxis = 21;
 [[nodiscard]] inline glm::u64vec3 cell(std::uint64_t k) {
     return {compact_bits(k), compact_bits(k >> 1), compact_bits(k >> 2)};
 }
+
+// Points sorted along the Morton curve of the cube [origin, origin + cube_size]³ divided into
+// 2^21 cells per axis: keys[j] is the key of point order[j], ascending (ties by index).
+struct SortedPoints {
+    glm::vec3 origin{0.0f};
+    float cube_size = 0.0f;
+    std::vector<std::uint64_t> keys;
+    std::vector<std::uint32_t> order;
+    // The edge of a cell of 2^shift base cells per axis.
+    [[nodiscard]] float cell_size(int shift) const {
+        return cube_size / static_cast<float>(1u << kBitsPerAxis) *
+               static_cast<float>(std::uint64_t{1} << shift);
+    }
+};
+
+// Sorts on all cores; the same positions give the same result for any thread count.
+[[nodiscard]] SortedPoints sort_points(const std::vector<glm::vec3>& positions);
+
+// The same, given an order sort_points made of the same positions before (as local geometry
+// keeps it): the keys are recomputed, and the sort is skipped when they are ascending.
+[[nodiscard]] SortedPoints sort_points(const std::vector<glm::vec3>& positions,
+                                       const std::vector<std::uint32_t>& earlier_order);
 
 } // namespace lfprobe::morton
