@@ -66,6 +66,8 @@ PlanSettings plan_settings_from(const py::dict& options) {
             s.bake.splat_plane_reach = v.cast<float>();
         } else if (key == "hole_fill_texels") {
             s.bake.hole_fill_texels = v.cast<int>();
+        } else if (key == "lod_texels") {
+            s.bake.lod_texels = v.cast<float>();
         } else {
             throw InputError(
                 "plan: unknown option '" + key +
@@ -73,7 +75,7 @@ PlanSettings plan_settings_from(const py::dict& options) {
                 "max_resolution, footprint, quantile, samples_per_spacing, classify, clearance, "
                 "cell_reach, max_move, partly_unknown, min_coverage_gain, drop, "
                 "classify_resolution, splat_scale, splat_plane_reach, "
-                "hole_fill_texels)");
+                "hole_fill_texels, lod_texels)");
         }
     }
     return s;

@@ -349,7 +349,10 @@ PYBIND11_MODULE(_native, m) {
                std::optional<py::array_t<std::uint32_t, py::array::c_style | py::array::forcecast>>
                    scan_index,
                const std::vector<std::optional<std::vector<double>>>& scanners,
-               const std::vector<double>& world_offset) {
+               const std::vector<double>& world_offset,
+               std::optional<py::array_t<float, py::array::c_style | py::array::forcecast>>
+                   intensities,
+               const std::vector<std::string>& scan_paths) {
                 const std::vector<glm::vec3> points = vec3_from(positions, "positions", -1);
                 const auto n = static_cast<py::ssize_t>(points.size());
                 std::vector<std::uint32_t> scans;
@@ -359,6 +362,13 @@ PYBIND11_MODULE(_native, m) {
                     }
                     scans.assign(scan_index->data(), scan_index->data() + n);
                 }
+                std::vector<float> intensity;
+                if (intensities) {
+                    if (intensities->ndim() != 1 || intensities->shape(0) != n) {
+                        throw InputError("intensities: expected shape (n,)");
+                    }
+                    intensity.assign(intensities->data(), intensities->data() + n);
+                }
                 std::vector<std::optional<glm::dvec3>> scanner_positions;
                 for (const auto& s : scanners) {
                     scanner_positions.push_back(s ? std::optional(dvec3_from(*s, "scanner"))
@@ -367,15 +377,18 @@ PYBIND11_MODULE(_native, m) {
                 auto cloud = std::make_shared<PointCloud>(cloud_from_parts(
                     points, colors ? vec3_from(*colors, "colors", n) : std::vector<glm::vec3>{},
                     normals ? vec3_from(*normals, "normals", n) : std::vector<glm::vec3>{},
-                    std::move(scans), scanner_positions, dvec3_from(world_offset, "world_offset")));
+                    std::move(scans), scanner_positions, dvec3_from(world_offset, "world_offset"),
+                    std::move(intensity), scan_paths));
                 return cloud;
             },
             py::arg("positions"), py::arg("colors") = py::none(), py::arg("normals") = py::none(),
             py::arg("scan_index") = py::none(),
             py::arg("scanners") = std::vector<std::optional<std::vector<double>>>{},
             py::arg("world_offset") = std::vector<double>{0.0, 0.0, 0.0},
+            py::arg("intensities") = py::none(), py::arg("scan_paths") = std::vector<std::string>{},
             "A cloud from arrays in the local frame: positions (n,3) float32, linear colours, "
-            "normals, scan index per point; scanners: one (x,y,z) or None per scan, local frame.");
+            "normals, scan index per point; scanners: one (x,y,z) or None per scan, local frame; "
+            "intensities (n,) as the scanner stored them; scan_paths: one file per scan.");
 
     py::class_<Job>(m, "Job", "Native work running off the Python thread.")
         .def_property_readonly("fraction", [](const Job& j) { return j.progress().fraction(); })

@@ -1,6 +1,7 @@
 #include "lfprobe/probe_plan.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 
@@ -213,7 +214,13 @@ BakeSummary bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry&
                                 {"max_resolution", settings.resolution.max_resolution}}},
                               {"plan", plan.to_json(cloud.world_offset)}});
     manifest.sources = sources;
-    return write_probe_set(
+    const auto hierarchy_start = std::chrono::steady_clock::now();
+    const PointHierarchy hierarchy = settings.bake.lod_texels > 0.0f
+                                         ? build_point_hierarchy(cloud, geometry, progress)
+                                         : PointHierarchy{};
+    const double hierarchy_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - hierarchy_start).count();
+    BakeSummary summary = write_probe_set(
         folder, std::move(manifest),
         [&](std::size_t i) {
             const PlannedProbe& p = plan.probes[i];
@@ -222,9 +229,15 @@ BakeSummary bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry&
             }
             BakeSettings one = settings.bake;
             one.resolution = p.resolution;
+            if (one.lod_texels > 0.0f) {
+                return bake_probe_from_hierarchy(cloud, geometry, hierarchy, p.position, one,
+                                                 progress);
+            }
             return bake_probe_from_cloud(cloud, geometry, p.position, one, progress);
         },
         progress);
+    summary.hierarchy_seconds = hierarchy_seconds;
+    return summary;
 }
 
 } // namespace lfprobe

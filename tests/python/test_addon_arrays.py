@@ -126,3 +126,28 @@ def test_mesh_parts_move_vertices_and_normals_to_the_world_frame():
     np.testing.assert_allclose(arrays["corner_colors"][3:], 0.5)
     assert arrays["corner_uvs"] is None and arrays["object_names"] == ["a"] and arrays["name"] == "m"
     assert mesh_arrays.stack_optional([None, np.zeros((3, 2), np.float32)], [3, 3], 2, 0.5)[0, 0] == 0.5
+
+
+def test_moved_scans_keep_their_normals_intensities_and_files(native):
+    """A scan object moved in Blender: its points and scanner move by the object's matrix, its
+    file normals turn with it (perpendicular even under a non-uniform scale), and intensities
+    and file paths stay."""
+    from lfprobe.core.cloud_transform import transform_scans
+
+    positions = np.array([[1, 0, 0], [0, 1, 0], [0, 0, 1]], np.float32)
+    normals = np.array([[1, 1, 0], [0, 0, 1], [0, 0, 1]], np.float32) / np.array([[2 ** 0.5], [1], [1]], np.float32)
+    cloud = native.PointCloud.from_arrays(positions, normals=normals, scan_index=np.array([0, 0, 1], np.uint32),
+                                          scanners=[[0.0, 0.0, 0.0], None],
+                                          intensities=np.array([5, 6, 7], np.float32),
+                                          scan_paths=["first.xyz", "second.xyz"])
+    scale_x = np.diag([2.0, 1.0, 1.0, 1.0])
+    scale_x[:3, 3] = (0.0, 0.0, 3.0)
+    moved = transform_scans(cloud, [scale_x.tolist(), np.eye(4).tolist()])
+    np.testing.assert_allclose(moved.positions[0], (2, 0, 3))
+    np.testing.assert_allclose(moved.positions[2], (0, 0, 1))
+    # The plane x + y = 1 becomes x/2 + y = 1: its normal (1, 2, 0)/√5, not (2, 1, 0)/√5.
+    np.testing.assert_allclose(moved.normals[0], np.array([1, 2, 0]) / 5 ** 0.5, atol=1e-6)
+    np.testing.assert_allclose(moved.normals[2], (0, 0, 1))
+    assert list(moved.intensities) == [5, 6, 7]
+    assert [s["path"] for s in moved.scans] == ["first.xyz", "second.xyz"]
+    assert moved.scans[0]["scanner"] == (0.0, 0.0, 3.0)

@@ -152,8 +152,43 @@ def test_plan_options_reach_the_splat_settings_of_the_planned_bake(native, tmp_p
                       for name in ("planned", "plain"))
     assert planned["splat_plane_reach"] == 3.0 and plain["splat_plane_reach"] == 2.0
     splat_keys = {"splat_scale", "splat_plane_reach", "max_splat_radius_texels", "hole_fill_texels",
-                  "min_distance"}
+                  "min_distance", "lod_texels"}
     assert splat_keys <= set(planned) and splat_keys <= set(plain)
+
+
+def test_lod_texels_reaches_the_bake_and_its_manifest(native, tmp_path):
+    """lod_texels (the point hierarchy's cut) is an option of the plain and the planned bake,
+    recorded in the manifest, and checked like the other splat settings."""
+    cloud = box_cloud(native)
+    probe = [[0.0, 0.0, 1.25]]
+    summary = native.bake_probe_set(cloud, str(tmp_path / "every_point"), resolution=64,
+                                    positions=probe, lod_texels=0.0)
+    assert summary["hierarchy_seconds"] < 1e-3  # no hierarchy is built
+    native.start_bake_planned_probe_set(cloud, str(tmp_path / "planned"), positions=probe,
+                                        options={"lod_texels": 2.0}).run()
+    for name, expected in (("every_point", 0.0), ("planned", 2.0)):
+        bake = json.loads((tmp_path / name / "manifest.json").read_text())["bake"]
+        assert bake["lod_texels"] == expected
+    with pytest.raises(ValueError, match="lod_texels must be a finite number"):
+        native.bake_probe_set(cloud, str(tmp_path / "bad"), resolution=64, positions=probe,
+                              lod_texels=float("nan"))
+
+
+def test_clouds_from_arrays_keep_intensities_and_scan_paths(native):
+    """An array cloud (E57/LAS readers, the add-on's moved scans) keeps the scanner's intensity
+    and the file of each scan, and refuses what does not fit."""
+    positions = np.arange(12, dtype=np.float32).reshape(4, 3)
+    cloud = native.PointCloud.from_arrays(positions, intensities=np.array([1, 2, 3, 4], np.float32),
+                                          scan_index=np.array([0, 1, 1, 0], np.uint32),
+                                          scanners=[None, [0.0, 0.0, 0.0]], scan_paths=["a.e57", "b.las"])
+    assert list(cloud.intensities) == [1, 2, 3, 4]
+    assert [s["path"] for s in cloud.scans] == ["a.e57", "b.las"]
+    with pytest.raises(ValueError, match="intensities: NaN"):
+        native.PointCloud.from_arrays(positions, intensities=np.array([1, np.nan, 3, 4], np.float32))
+    with pytest.raises(ValueError, match="intensities: expected shape"):
+        native.PointCloud.from_arrays(positions, intensities=np.ones(3, np.float32))
+    with pytest.raises(ValueError, match="one path per scan"):
+        native.PointCloud.from_arrays(positions, scan_paths=["a", "b"])
 
 
 def test_grid_positions_are_the_bakes_with_a_one_probe_axis_at_the_centre(native):

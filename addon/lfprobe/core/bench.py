@@ -96,13 +96,20 @@ def room_cloud(points: int, seed: int = 1, with_normals: bool = False):
         n[:, axis] = sign
         normal_chunks.append(n)
     positions = np.concatenate(chunks).astype(np.float32)
-    stripes = 0.5 + 0.5 * np.sin(7.0 * positions[:, 0]) * np.cos(5.0 * positions[:, 1])
-    colors = np.stack(
-        [0.1 + 0.7 * stripes, 0.2 + 0.3 * (positions[:, 2] / 2.7), 0.4 - 0.2 * stripes], axis=1
-    ).astype(np.float32)
+    del chunks
+    colors = room_colour(positions)
     if with_normals:
         return positions, colors, np.concatenate(normal_chunks)
     return positions, colors
+
+
+def room_colour(positions: np.ndarray) -> np.ndarray:
+    """The benchmark room's colour pattern at (n, 3) positions: linear RGB (n, 3) float32. The
+    room's mesh has no colours, so a probe's true radiance comes from this at its hit points."""
+    x, y, z = (positions[..., a] for a in range(3))
+    stripes = 0.5 + 0.5 * np.sin(7.0 * x) * np.cos(5.0 * y)
+    return np.stack([0.1 + 0.7 * stripes, 0.2 + 0.3 * (z / 2.7), 0.4 - 0.2 * stripes],
+                    axis=-1).astype(np.float32)
 
 
 def write_xyz(path: str, positions: np.ndarray, colors_u8: np.ndarray) -> None:
@@ -163,6 +170,7 @@ def bake_benchmark(points: int, resolution: int, tmp: str) -> dict:
         "probes": n,
         "generate_seconds": generate_seconds,
         "normals_seconds_per_cloud": summary["normals_seconds"],
+        "hierarchy_seconds_per_cloud": summary["hierarchy_seconds"],
         "bake_seconds_per_probe": summary["bake_seconds"] / n,
         "write_seconds_per_probe": summary["write_seconds"] / n,
         "coverage": summary["mean_coverage"],
@@ -171,6 +179,74 @@ def bake_benchmark(points: int, resolution: int, tmp: str) -> dict:
         "disk_bytes_per_probe": info["disk_bytes_per_probe"],
         "paper_bytes_per_2048_probe": PAPER_BYTES_PER_2048_PROBE,
     }
+
+
+HIERARCHY_PROBE = [1.5, 1.5, 1.4]
+
+
+def _texel_directions(resolution: int) -> np.ndarray:
+    n = resolution
+    centres = (np.arange(n, dtype=np.float64) + 0.5) / n
+    uv = np.stack(np.meshgrid(centres, centres), axis=-1).reshape(-1, 2).astype(np.float32)
+    return native.load().oct_decode(uv).reshape(n, n, 3)
+
+
+def reference_probe(resolution: int, tmp: str) -> dict:
+    """The exact probe at HIERARCHY_PROBE: the room mesh baked with Embree for the distances,
+    the room's colour pattern at each texel's hit for the radiance."""
+    _native = native.load()
+    obj = os.path.join(tmp, "room.obj")
+    write_room_obj(obj)
+    folder = os.path.join(tmp, "mesh_probe")
+    _native.start_bake_probe_set_from_mesh(_native.load_mesh(obj), folder, resolution=resolution,
+                                           positions=[HIERARCHY_PROBE]).run()
+    probe = _native.read_probe(os.path.join(folder, "probe_00000.exr"))
+    hits = np.asarray(HIERARCHY_PROBE) + _texel_directions(resolution) * probe["distance"][..., None]
+    probe["true_rgb"] = room_colour(hits)
+    shutil.rmtree(folder, ignore_errors=True)
+    return probe
+
+
+def probe_errors(probe: dict, reference: dict) -> dict:
+    """A scan-baked probe against the exact one, over the texels the exact probe sees a
+    surface: PSNR of the radiance, depth error, and the share of those texels left unknown."""
+    surface = reference["state"] == 2
+    known = (probe["state"] == 2) | (probe["state"] == 3)
+    both = surface & known
+    mse = float(np.mean((probe["rgba"][..., :3][both] - reference["true_rgb"][both]) ** 2))
+    depth = np.abs(probe["distance"][both] - reference["distance"][both]) / reference["distance"][both]
+    return {
+        "psnr_db": 10.0 * np.log10(1.0 / max(mse, 1e-20)),
+        "depth_error_mean": float(depth.mean()),
+        "depth_error_p99": float(np.percentile(depth, 99)),
+        "unknown_share": float(np.mean(~known[surface])),
+    }
+
+
+def hierarchy_benchmark(points: int, resolution: int, lods: list, reference: dict, tmp: str) -> dict:
+    """One probe baked from a generated room of `points` points, once per lod_texels in `lods`
+    (0: every point splatted, as before the point hierarchy), each against the exact probe."""
+    _native = native.load()
+    start = time.perf_counter()
+    positions, colors = room_cloud(points)
+    generate_seconds = time.perf_counter() - start
+    cloud = _native.PointCloud.from_arrays(positions, colors, scanners=[HIERARCHY_PROBE])
+    del positions, colors
+    row = {"points": points, "resolution": resolution, "generate_seconds": generate_seconds,
+           "bakes": []}
+    for lod in lods:
+        folder = os.path.join(tmp, f"lod_{lod}")
+        summary = _native.bake_probe_set(cloud, folder, resolution=resolution,
+                                         positions=[HIERARCHY_PROBE], positions_in_world=False,
+                                         lod_texels=float(lod))
+        probe = _native.read_probe(os.path.join(folder, "probe_00000.exr"))
+        shutil.rmtree(folder, ignore_errors=True)
+        row["bakes"].append({"lod_texels": lod, "normals_seconds": summary["normals_seconds"],
+                             "hierarchy_seconds": summary["hierarchy_seconds"],
+                             "bake_seconds": summary["bake_seconds"],
+                             **probe_errors(probe, reference)})
+    del cloud
+    return row
 
 
 def write_results(path: str, results: dict) -> None:
@@ -215,6 +291,7 @@ def main(args) -> int:
         mib = 1024 * 1024
         print(
             f"  local geometry (kNN normals + spacing, once per cloud): {b['normals_seconds_per_cloud']:.2f} s\n"
+            f"  point hierarchy (once per cloud): {b['hierarchy_seconds_per_cloud']:.2f} s\n"
             f"  bake per probe (splat, resolve, hole fill): {b['bake_seconds_per_probe']:.2f} s\n"
             f"  EXR write per probe: {b['write_seconds_per_probe']:.2f} s\n"
             f"  coverage: surface {100 * b['coverage']['surface']:.2f}%, "
@@ -230,6 +307,32 @@ def main(args) -> int:
                 f"{b['memory_bytes_per_probe'] / paper:.2f}× in memory, "
                 f"{b['disk_bytes_per_probe'] / paper:.2f}× on disk"
             )
+        points_list = [int(float(p)) for p in str(args.hierarchy_points).split(",") if p.strip()]
+        if points_list:
+            lods = [float(x) for x in str(args.hierarchy_lods).split(",")]
+            print(f"\n== point hierarchy: one {args.res}² probe from generated rooms, every point "
+                  f"(lod_texels 0) vs the hierarchy's cut; errors against the exact (mesh) probe ==")
+            reference = reference_probe(args.res, tmp)
+            rows = []
+            for points in points_list:
+                row = hierarchy_benchmark(points, args.res, lods, reference, tmp)
+                rows.append(row)
+                base = row["bakes"][0]
+                print(f"{points:,} points (generated in {row['generate_seconds']:.1f} s; normals + "
+                      f"spacing {base['normals_seconds']:.2f} s on {os.cpu_count()} cores):")
+                for b in row["bakes"]:
+                    print(f"  lod_texels {b['lod_texels']:g}: bake {b['bake_seconds']:.2f} s"
+                          f" (+ hierarchy {b['hierarchy_seconds']:.2f} s once per cloud), "
+                          f"PSNR {b['psnr_db']:.2f} dB, depth error mean {100 * b['depth_error_mean']:.3f} %"
+                          f" p99 {100 * b['depth_error_p99']:.3f} %, unknown {100 * b['unknown_share']:.3f} %;"
+                          f" {base['bake_seconds'] / b['bake_seconds']:.2f}× the all-points bake's speed,"
+                          f" {b['psnr_db'] - base['psnr_db']:+.2f} dB")
+            if len(rows) > 1:
+                first, last = rows[0]["bakes"][-1], rows[-1]["bakes"][-1]
+                print(f"  {rows[-1]['points'] / rows[0]['points']:.0f}× the points: the hierarchy bake "
+                      f"(lod_texels {first['lod_texels']:g}) takes {last['bake_seconds'] / first['bake_seconds']:.2f}× "
+                      f"the time, every point {rows[-1]['bakes'][0]['bake_seconds'] / rows[0]['bakes'][0]['bake_seconds']:.2f}×")
+            results["hierarchy"] = rows
         write_results(args.json, results)
         return 0
     finally:

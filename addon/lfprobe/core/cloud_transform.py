@@ -51,7 +51,23 @@ def transform_scans(cloud, file_matrices: Sequence[Matrix4]):
     return native.load().PointCloud.from_arrays(
         positions.astype(np.float32),
         colors=cloud.colors,
+        # File normals turn with their points; intensities and file paths are kept.
+        normals=None if cloud.normals is None else _turned_normals(cloud, file_matrices),
         scan_index=scan_index,
         scanners=scanners,
         world_offset=list(cloud.world_offset),
+        intensities=cloud.intensities,
+        scan_paths=[scan["path"] for scan in cloud.scans],
     )
+
+
+def _turned_normals(cloud, file_matrices) -> np.ndarray:
+    """The cloud's file normals turned by each file's matrix (its inverse transpose, so a
+    scaled object keeps them perpendicular to its surfaces), unit length again."""
+    normals = np.array(cloud.normals, dtype=np.float64)
+    for file_index in range(len(cloud.scans)):
+        members = cloud.scan_index == file_index
+        linear = np.asarray(file_matrices[file_index], dtype=np.float64)[:3, :3]
+        normals[members] = normals[members] @ np.linalg.inv(linear)
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    return (normals / np.where(length > 0.0, length, 1.0)).astype(np.float32)

@@ -53,6 +53,9 @@ class BakeOptions:
     splat_scale: float = field(default_factory=lambda: defaults.bake("splat_scale"))
     hole_fill_texels: int = field(default_factory=lambda: defaults.bake("hole_fill_texels"))
     normal_neighbours: int = field(default_factory=lambda: defaults.bake("normal_neighbours"))
+    # Scan bakes: how many texels apart the point hierarchy's cell surfels may be where they
+    # stand in for the points (0: every point is splatted).
+    lod_texels: float = field(default_factory=lambda: defaults.bake("lod_texels"))
     extra: dict = field(default_factory=dict)
     # None: every probe at `resolution`. A dict: plan first (bake --auto): per-probe resolution
     # from the data, classification, moves and drops, with these options of
@@ -129,7 +132,8 @@ def bake_from_cloud(
     where = dict(**placement.native_kwargs(), sources_json=json.dumps(list(sources)))
     if options.plan is not None:
         plan = {"resolution": int(options.resolution), "splat_scale": float(options.splat_scale),
-                "hole_fill_texels": int(options.hole_fill_texels), **options.plan}
+                "hole_fill_texels": int(options.hole_fill_texels),
+                "lod_texels": float(options.lod_texels), **options.plan}
         job = _native.start_bake_planned_probe_set(cloud, out_dir, **where, options=plan)
         if start_only:
             return job
@@ -137,7 +141,8 @@ def bake_from_cloud(
     else:
         kwargs = dict(where, resolution=int(options.resolution), splat_scale=float(options.splat_scale),
                       hole_fill_texels=int(options.hole_fill_texels),
-                      normal_neighbours=int(options.normal_neighbours))
+                      normal_neighbours=int(options.normal_neighbours),
+                      lod_texels=float(options.lod_texels))
         if start_only:
             return _native.start_bake_probe_set(cloud, out_dir, **kwargs)
         summary = _native.bake_probe_set(cloud, out_dir, progress=progress, **kwargs)

@@ -253,8 +253,12 @@ def _from_parts(_native, parts: List[ScanArrays], normals_of: list, world_offset
     scan_index = np.empty(total, dtype=np.uint32)
     any_colour = any(p.colors is not None for p in parts)
     any_normal = any(n is not None for n in normals_of)
+    # Intensity is kept only where every part has it: the bake maps intensity to grey over the
+    # cloud's range, which a part without it would distort.
+    all_intensity = bool(parts) and all(p.intensities is not None for p in parts)
     colors = np.empty((total, 3), dtype=np.float32) if any_colour else None
     normals = np.zeros((total, 3), dtype=np.float32) if any_normal else None
+    intensities = np.empty(total, dtype=np.float32) if all_intensity else None
     grey = float(((0.5 + 0.055) / 1.055) ** 2.4)  # sRGB mid grey, decoded, as the native merge
     first = 0
     for index, part in enumerate(parts):
@@ -266,10 +270,13 @@ def _from_parts(_native, parts: List[ScanArrays], normals_of: list, world_offset
             colors[block] = grey if part.colors is None else part.colors
         if normals is not None and normals_of[index] is not None:
             normals[block] = normals_of[index]
+        if intensities is not None:
+            intensities[block] = part.intensities
         first += n
     scanners = [None if p.scanner is None else list(np.asarray(p.scanner, dtype=np.float64) - offset) for p in parts]
     cloud = _native.PointCloud.from_arrays(positions, colors=colors, normals=normals, scan_index=scan_index,
-                                           scanners=scanners, world_offset=[float(v) for v in offset])
+                                           scanners=scanners, world_offset=[float(v) for v in offset],
+                                           intensities=intensities, scan_paths=[str(p.path) for p in parts])
     records = [ScanRecord(p.path, len(p.positions), None if p.scanner is None else [float(v) for v in p.scanner],
                           dict(p.metadata)) for p in parts]
     return cloud, records

@@ -43,12 +43,14 @@ struct PointCloud {
 // what a file reader would (finite positions, colours and normals one per point, every scan
 // index naming one of `scanners`), fills the per-scan counts. `scanners`: one entry per scan,
 // its position in the local frame or none; an empty list is one scan without a scanner.
-// `scan_index` empty: every point is scan 0. InputError names the first thing that does not fit.
-[[nodiscard]] PointCloud cloud_from_parts(std::vector<glm::vec3> positions,
-                                          std::vector<glm::vec3> colors,
-                                          std::vector<glm::vec3> normals,
-                                          std::vector<std::uint32_t> scan_index,
-                                          const std::vector<std::optional<glm::dvec3>>& scanners,
-                                          const glm::dvec3& world_offset);
+// `scan_index` empty: every point is scan 0. `intensities`: one finite value per point, or
+// empty. `scan_paths`: the file each scan came from, one per scan, or empty ("array").
+// InputError names the first thing that does not fit.
+[[nodiscard]] PointCloud
+cloud_from_parts(std::vector<glm::vec3> positions, std::vector<glm::vec3> colors,
+                 std::vector<glm::vec3> normals, std::vector<std::uint32_t> scan_index,
+                 const std::vector<std::optional<glm::dvec3>>& scanners,
+                 const glm::dvec3& world_offset, std::vector<float> intensities = {},
+                 const std::vector<std::string>& scan_paths = {});
 
 } // namespace lfprobe

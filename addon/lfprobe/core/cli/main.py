@@ -39,6 +39,7 @@ def _cmd_bake(args) -> int:
         splat_scale=args.splat_scale,
         hole_fill_texels=args.hole_fill,
         normal_neighbours=args.normal_k,
+        lod_texels=args.lod_texels,
     )
     if args.auto:
         if args.mesh:
@@ -77,6 +78,8 @@ def _print_bake_summary(args, summary: dict, source: str) -> int:
     timing = []
     if "normals_seconds" in summary:
         timing.append(f"normals {summary['normals_seconds']:.2f} s")
+    if summary.get("hierarchy_seconds"):
+        timing.append(f"point hierarchy {summary['hierarchy_seconds']:.2f} s")
     timing.append(f"bake {summary['bake_seconds']:.2f} s ({summary['bake_seconds'] / n:.2f} s/probe)")
     if "write_seconds" in summary:
         timing.append(f"write {summary['write_seconds']:.2f} s")
@@ -247,6 +250,10 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--splat-scale", type=float, default=defaults.bake("splat_scale"), help="splat radius / point spacing")
     bake.add_argument("--hole-fill", type=int, default=defaults.bake("hole_fill_texels"), help="largest hole (texels) to fill")
     bake.add_argument("--normal-k", type=int, default=defaults.bake("normal_neighbours"), help="neighbours for PCA normals")
+    bake.add_argument("--lod-texels", type=float, default=defaults.bake("lod_texels"), metavar="T",
+                      help="scans: where the point hierarchy's cell surfels are at most T texels apart "
+                           "as the probe sees them they stand in for the points, so a probe's cost "
+                           "follows its texels, not the cloud (default %(default)s; 0: splat every point)")
     bake.add_argument("--json", action="store_true", help="print the summary as JSON")
     bake.add_argument("--quiet", action="store_true", help="no progress output")
     bake.add_argument("--auto", action="store_true",
@@ -323,6 +330,11 @@ def build_parser() -> argparse.ArgumentParser:
                        help="points in the generated file for the parsing comparison")
     bench.add_argument("--splat-points", default="1000000,10000000,30000000",
                        help="render: cloud sizes for the splatting comparison")
+    bench.add_argument("--hierarchy-points", default="10000000,100000000",
+                       help="core: cloud sizes for the point hierarchy's bake comparison "
+                            "(comma-separated; empty: skip)")
+    bench.add_argument("--hierarchy-lods", default="0,1,2",
+                       help="core: lod_texels values to bake with, 0 (every point) first")
     bench.add_argument("--json", metavar="FILE", help="also write the figures as JSON")
     bench.set_defaults(run=_cmd_bench)
     return parser
