@@ -79,11 +79,42 @@ struct FacingSum {
     }
 };
 
-// Fills a level's surfels: per cell, `visit(cell, add)` adds the cell's members, and the
-// non-empty facings become the cell's surfels in facing order. Cells are processed in chunks
-// on all cores and the chunks joined in order.
-template <class VisitCell>
-void fill_surfels(PointHierarchy::Level& level, VisitCell&& visit, Progress* progress) {
+// One cell's sums per facing. A cell nearly always holds one or two facings: only those are
+// cleared and read, not all seven (which cost more than the sums themselves).
+class CellSums {
+public:
+    void add(std::uint8_t facing, const glm::vec3& p, const glm::vec3& n, const glm::vec3& c,
+             float s, bool o, std::uint64_t weight) {
+        const auto bit = static_cast<std::uint8_t>(1u << facing);
+        if ((used_ & bit) == 0) {
+            sums_[facing] = FacingSum{};
+            used_ = static_cast<std::uint8_t>(used_ | bit);
+        }
+        sums_[facing].add(p, n, c, s, o, weight);
+    }
+    // Appends the cell's surfels in facing order and clears the sums; returns how many.
+    std::uint32_t emit(std::vector<CellSurfel>& out, float min_spacing) {
+        std::uint32_t emitted = 0;
+        for (std::uint8_t f = 0; f < kFacings; ++f) {
+            if ((used_ & (1u << f)) != 0) {
+                out.push_back(sums_[f].surfel(f, min_spacing));
+                ++emitted;
+            }
+        }
+        used_ = 0;
+        return emitted;
+    }
+
+private:
+    std::array<FacingSum, kFacings> sums_;
+    std::uint8_t used_ = 0;
+};
+
+// Fills a level's surfels: per chunk of cells, `visitor_for(first, last)` gives the function
+// `visit(cell, sums)` that adds a cell's members, and the non-empty facings become the cell's
+// surfels in facing order. Chunks run on all cores and are joined in order.
+template <class VisitorFor>
+void fill_surfels(PointHierarchy::Level& level, VisitorFor&& visitor_for, Progress* progress) {
     const std::size_t cells = level.cell_count();
     const std::size_t chunks = (cells + kCellChunk - 1) / kCellChunk;
     std::vector<std::vector<CellSurfel>> chunk_surfels(chunks);
@@ -95,15 +126,11 @@ void fill_surfels(PointHierarchy::Level& level, VisitCell&& visit, Progress* pro
         }
         const std::size_t end = std::min(cells, (chunk + 1) * kCellChunk);
         std::vector<CellSurfel>& out = chunk_surfels[chunk];
+        auto visit = visitor_for(chunk * kCellChunk, end);
+        CellSums sums;
         for (std::size_t c = chunk * kCellChunk; c < end; ++c) {
-            std::array<FacingSum, kFacings> sums{};
             visit(c, sums);
-            for (std::uint8_t f = 0; f < kFacings; ++f) {
-                if (sums[f].count > 0) {
-                    out.push_back(sums[f].surfel(f, min_spacing));
-                    ++per_cell[c];
-                }
-            }
+            per_cell[c] = sums.emit(out, min_spacing);
         }
     });
     level.first_surfel.assign(cells + 1, 0);
@@ -212,20 +239,43 @@ PointHierarchy build_point_hierarchy(const PointCloud& cloud, const LocalGeometr
             split_runs(keys, shift, level.cell_keys, level.first_point);
             fill_surfels(
                 level,
-                [&](std::size_t c, std::array<FacingSum, kFacings>& sums) {
-                    for (std::uint32_t j = level.first_point[c]; j < level.first_point[c + 1];
-                         ++j) {
-                        const std::uint32_t i = h.order[j];
-                        const bool oriented = geometry.oriented[i] != 0;
-                        glm::vec3 normal = geometry.normals[i];
-                        const std::uint8_t f = facing_of(normal, oriented);
-                        // An unoriented normal joins its facing with the facing's sign.
-                        if (!oriented && f != kNoFacing && normal[f / 2] < 0.0f) {
-                            normal = -normal;
-                        }
-                        sums[f].add(cloud.positions[i], normal, colour_of(i), geometry.spacing[i],
-                                    oriented, 1);
+                [&](std::size_t first_cell, std::size_t last_cell) {
+                    // The chunk's points in curve order, gathered in one tight loop first: the
+                    // cloud's arrays are in file order, and a loop that does nothing but load
+                    // keeps many of those scattered reads in flight at once.
+                    const std::uint32_t first = level.first_point[first_cell];
+                    const std::uint32_t count = level.first_point[last_cell] - first;
+                    std::vector<glm::vec3> position(count);
+                    std::vector<glm::vec3> normal(count);
+                    std::vector<glm::vec3> colour(count);
+                    std::vector<float> point_spacing(count);
+                    std::vector<std::uint8_t> oriented(count);
+                    for (std::uint32_t k = 0; k < count; ++k) {
+                        const std::uint32_t i = h.order[first + k];
+                        position[k] = cloud.positions[i];
+                        normal[k] = geometry.normals[i];
+                        colour[k] = colour_of(i);
+                        point_spacing[k] = geometry.spacing[i];
+                        oriented[k] = geometry.oriented[i];
                     }
+                    return
+                        [&level, first, position = std::move(position), normal = std::move(normal),
+                         colour = std::move(colour), point_spacing = std::move(point_spacing),
+                         oriented = std::move(oriented)](std::size_t c, CellSums& sums) {
+                            for (std::uint32_t j = level.first_point[c];
+                                 j < level.first_point[c + 1]; ++j) {
+                                const std::uint32_t k = j - first;
+                                const bool known_sign = oriented[k] != 0;
+                                glm::vec3 towards = normal[k];
+                                const std::uint8_t f = facing_of(towards, known_sign);
+                                // An unoriented normal joins its facing with the facing's sign.
+                                if (!known_sign && f != kNoFacing && towards[f / 2] < 0.0f) {
+                                    towards = -towards;
+                                }
+                                sums.add(f, position[k], towards, colour[k], point_spacing[k],
+                                         known_sign, 1);
+                            }
+                        };
                 },
                 progress);
         } else {
@@ -237,13 +287,15 @@ PointHierarchy build_point_hierarchy(const PointCloud& cloud, const LocalGeometr
             }
             fill_surfels(
                 level,
-                [&](std::size_t c, std::array<FacingSum, kFacings>& sums) {
-                    for (std::uint32_t k = below.first_surfel[level.first_child[c]];
-                         k < below.first_surfel[level.first_child[c + 1]]; ++k) {
-                        const CellSurfel& s = below.surfels[k];
-                        sums[s.facing].add(s.position, s.normal, s.colour, s.spacing,
-                                           s.oriented != 0, s.count);
-                    }
+                [&](std::size_t /*first_cell*/, std::size_t /*last_cell*/) {
+                    return [&](std::size_t c, CellSums& sums) {
+                        for (std::uint32_t k = below.first_surfel[level.first_child[c]];
+                             k < below.first_surfel[level.first_child[c + 1]]; ++k) {
+                            const CellSurfel& s = below.surfels[k];
+                            sums.add(s.facing, s.position, s.normal, s.colour, s.spacing,
+                                     s.oriented != 0, s.count);
+                        }
+                    };
                 },
                 progress);
         }
