@@ -106,22 +106,27 @@ void bind_render(py::module_& m) {
         .def_static(
             "load",
             [](const std::string& folder, int coarse_resolution, const py::object& storage,
-               double distance_step) {
+               double distance_step, bool lazy) {
                 const std::optional<ProbeStorage> chosen = storage_from(storage, distance_step);
                 py::gil_scoped_release release;
                 return std::make_shared<ProbeField>(
-                    ProbeField::load(folder, nullptr, coarse_resolution, chosen));
+                    ProbeField::load(folder, nullptr, coarse_resolution, chosen, lazy));
             },
             py::arg("folder"), py::arg("coarse_resolution") = 0, py::arg("storage") = py::none(),
-            py::arg("distance_step") = 0.0,
+            py::arg("distance_step") = 0.0, py::arg("lazy") = false,
             "Load a probe set; coarse_resolution is the size of the coarsest min-distance level "
             "kept (0: every level down to 1x1). storage: how the probes are held in memory: "
             "None (as the manifest says), \"full\", \"compact\" (8-bit sRGB radiance, 16-bit "
             "distance in steps of distance_step metres, default 1 mm, 8+8-bit octahedral normals, "
-            "no confidence) or a dict like the manifest's \"storage\".")
+            "no confidence) or a dict like the manifest's \"storage\". lazy: read only the "
+            "manifest now (and check every probe file is there); each probe's maps are decoded "
+            "the first time a trace reaches it.")
         .def_property_readonly("storage",
                                [](const ProbeField& f) { return storage_dict(f.storage()); })
         .def_property_readonly("probe_count", &ProbeField::probe_count)
+        .def_property_readonly("loaded_probe_count", &ProbeField::loaded_probe_count,
+                               "Probes whose maps are in memory (fewer while a lazily opened "
+                               "set has not been traced everywhere).")
         .def_property_readonly("is_grid", &ProbeField::is_grid)
         .def_property_readonly("memory_bytes", &ProbeField::memory_bytes)
         .def_property_readonly("world_offset",

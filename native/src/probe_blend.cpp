@@ -47,7 +47,7 @@ std::size_t candidates_around(const ProbeField& field, const glm::dvec3& point,
     std::array<Candidate, kMaxBlend> best{};
     std::size_t kept = 0;
     auto offer = [&](std::size_t index) {
-        const glm::dvec3 position = field.probe(index).position;
+        const glm::dvec3 position = field.probe_position(index);
         const glm::dvec3 to = position - point;
         const Candidate c{glm::dot(to, to), position, index};
         if (kept < wanted) {
@@ -194,7 +194,7 @@ RadianceFootprint footprint_of(const ProbeField& field, std::size_t probe, doubl
     }
     return {&field.radiance_mips(probe),
             footprint_in_texels(eye_distance, settings.sample_angle, probe_distance,
-                                field.probe(probe).resolution)};
+                                field.probe_resolution(probe))};
 }
 
 void shade_hit(const ProbeField& field, const Ray& ray, FieldTraceResult& hit,

@@ -4,6 +4,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <filesystem>
 #include <mutex>
 #include <utility>
 
@@ -167,28 +168,64 @@ struct ProbeField::RadianceMipCache {
     std::vector<RadianceMips> mips;
 };
 
+namespace fs = std::filesystem;
+
+struct ProbeField::ProbeSlots {
+    explicit ProbeSlots(std::size_t count) : slots(count) {}
+    std::vector<ProbeSlot> slots; // sized once: slots never move
+};
+
 ProbeField::ProbeField() : radiance_mips_(std::make_shared<RadianceMipCache>()) {}
+
+const ProbeField::ProbeSlot& ProbeField::slot(std::size_t i) const {
+    const ProbeSlot& s = slots_->slots.at(i);
+    if (!s.ready.load(std::memory_order_acquire)) {
+        fill_slot(i);
+    }
+    return s;
+}
+
+void ProbeField::fill_slot(std::size_t i) const {
+    ProbeSlot& s = slots_->slots.at(i);
+    // A read that throws leaves the slot empty: the next use tries again and reports again.
+    std::call_once(s.once, [&] {
+        s.map = read_probe(folder_, manifest_, i);
+        if (!manifest_.storage.is_full()) {
+            pack_probe(s.map, manifest_.storage);
+        }
+        s.levels = levels_of(s.map, coarsest_level_);
+        s.ready.store(true, std::memory_order_release);
+    });
+}
+
+std::size_t ProbeField::loaded_probe_count() const {
+    std::size_t loaded = 0;
+    for (const ProbeSlot& s : slots_->slots) {
+        loaded += s.ready.load(std::memory_order_acquire) ? 1 : 0;
+    }
+    return loaded;
+}
 
 const RadianceMips& ProbeField::radiance_mips(std::size_t i) const {
     RadianceMipCache& cache = *radiance_mips_;
     std::call_once(cache.built, [&] {
-        cache.mips.resize(probes_.size());
-        tbb::parallel_for(std::size_t{0}, probes_.size(),
-                          [&](std::size_t k) { cache.mips[k] = RadianceMips(probes_[k]); });
+        cache.mips.resize(probe_count());
+        tbb::parallel_for(std::size_t{0}, probe_count(),
+                          [&](std::size_t k) { cache.mips[k] = RadianceMips(probe(k)); });
         cache.ready.store(true, std::memory_order_release);
     });
     return cache.mips.at(i);
 }
 
 ProbeField ProbeField::load(const std::string& folder, Progress* progress, int coarse_resolution,
-                            const std::optional<ProbeStorage>& storage) {
+                            const std::optional<ProbeStorage>& storage, bool lazy) {
     if (coarse_resolution < 0) {
         throw InputError(
             "probe field: coarse_resolution must be 0 (every level) or positive, got " +
             std::to_string(coarse_resolution));
     }
-    const int coarsest = std::max(coarse_resolution, 1);
     ProbeField field;
+    field.coarsest_level_ = std::max(coarse_resolution, 1);
     field.manifest_ = read_manifest(folder);
     field.folder_ = folder;
     const std::size_t count = field.manifest_.probes.size();
@@ -198,60 +235,71 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
     field.check_placement();
     if (storage.has_value()) {
         field.manifest_.storage = *storage;
+        for (ProbeRecord& record : field.manifest_.probes) {
+            const auto n = static_cast<std::size_t>(record.resolution);
+            record.memory_bytes = n * n * storage->bytes_per_texel();
+        }
     }
-    const ProbeStorage chosen = field.manifest_.storage;
+    field.slots_ = std::make_shared<ProbeSlots>(count);
+    if (lazy) {
+        // Every probe's file must be there now, so that a missing one is a clear error of
+        // opening the set rather than a surprise in the middle of a frame.
+        for (const ProbeRecord& record : field.manifest_.probes) {
+            const fs::path path = fs::path(folder) / record.file;
+            std::error_code error;
+            if (!fs::is_regular_file(path, error)) {
+                throw IoError(path.string() + ": no such probe file (listed in " + folder +
+                              "/manifest.json)");
+            }
+        }
+        return field;
+    }
     if (progress != nullptr) {
         progress->begin_stage("loading probes", count);
     }
-    field.probes_.resize(count);
-    field.levels_.resize(count);
     tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
         if (progress != nullptr) {
             progress->throw_if_cancelled();
         }
-        ProbeMap& map = field.probes_[i];
-        map = read_probe(folder, field.manifest_, i);
-        if (!chosen.is_full()) {
-            pack_probe(map, chosen);
-        }
-        field.levels_[i] = levels_of(map, coarsest);
-        field.manifest_.probes[i].memory_bytes = map.memory_bytes();
+        field.fill_slot(i);
         if (progress != nullptr) {
             progress->advance(1);
         }
     });
+    for (std::size_t i = 0; i < count; ++i) {
+        field.manifest_.probes[i].memory_bytes = field.probe(i).memory_bytes();
+    }
     return field;
 }
 
 ProbeField::ProbeField(const ProbePlacement& placement, std::vector<ProbeMap> probes,
                        const glm::dvec3& world_offset)
-    : probes_(std::move(probes)), radiance_mips_(std::make_shared<RadianceMipCache>()) {
+    : radiance_mips_(std::make_shared<RadianceMipCache>()) {
     manifest_.world_offset = world_offset;
     manifest_.placement = placement;
-    if (probes_.empty()) {
+    if (probes.empty()) {
         throw InputError("probe field: no probes given");
     }
-    for (std::size_t i = 0; i < probes_.size(); ++i) {
+    for (std::size_t i = 0; i < probes.size(); ++i) {
         ProbeRecord record;
         record.file = probe_file_name(i);
-        record.position = probes_[i].position;
-        record.resolution = probes_[i].resolution;
+        record.position = probes[i].position;
+        record.resolution = probes[i].resolution;
+        record.memory_bytes = probes[i].memory_bytes();
         manifest_.probes.push_back(record);
     }
     check_placement();
-    build_levels(nullptr);
-}
-
-void ProbeField::build_levels(Progress* progress) {
-    levels_.resize(probes_.size());
-    tbb::parallel_for(std::size_t{0}, probes_.size(), [&](std::size_t i) {
-        if (!probes_[i].is_complete()) {
+    slots_ = std::make_shared<ProbeSlots>(probes.size());
+    tbb::parallel_for(std::size_t{0}, probes.size(), [&](std::size_t i) {
+        if (!probes[i].is_complete()) {
             throw InputError("probe field: probe " + std::to_string(i) + " has no maps");
         }
-        levels_[i] = levels_of(probes_[i], 1);
-        if (progress != nullptr) {
-            progress->advance(1);
-        }
+        ProbeSlot& s = slots_->slots[i];
+        std::call_once(s.once, [&] {
+            s.map = std::move(probes[i]);
+            s.levels = levels_of(s.map, 1);
+            s.ready.store(true, std::memory_order_release);
+        });
     });
 }
 
@@ -279,8 +327,10 @@ void ProbeField::check_placement() const {
 
 std::size_t ProbeField::memory_bytes() const {
     std::size_t bytes = 0;
-    for (std::size_t i = 0; i < probes_.size(); ++i) {
-        bytes += probes_[i].memory_bytes() + levels_[i].memory_bytes();
+    for (const ProbeSlot& s : slots_->slots) {
+        if (s.ready.load(std::memory_order_acquire)) {
+            bytes += s.map.memory_bytes() + s.levels.memory_bytes();
+        }
     }
     if (radiance_mips_->ready.load(std::memory_order_acquire)) {
         for (const RadianceMips& m : radiance_mips_->mips) {
@@ -307,10 +357,10 @@ FieldMode ProbeField::resolve_mode(const FieldTraceSettings& settings) const {
 
 ProbeTraceResult ProbeField::trace_one(std::size_t probe, const Ray& ray,
                                        const TraceSettings& settings) const {
-    const ProbeMap& map = probes_.at(probe);
+    const ProbeSlot& s = slot(probe);
     Ray local = ray;
-    local.origin = ray.origin - map.position;
-    return trace_probe(map, &levels_[probe], local, settings);
+    local.origin = ray.origin - s.map.position;
+    return trace_probe(s.map, &s.levels, local, settings);
 }
 
 FieldTraceResult ProbeField::trace(const Ray& ray, const FieldTraceSettings& settings) const {
@@ -326,13 +376,13 @@ FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
     FieldQuery query{*this, ray, settings.probe, {}};
     query.result.free_until = ray.t_min;
     const std::size_t wanted =
-        std::min(probes_.size(), static_cast<std::size_t>(std::max(settings.max_probes, 1)));
+        std::min(probe_count(), static_cast<std::size_t>(std::max(settings.max_probes, 1)));
     // The `wanted` nearest, kept sorted in a small buffer.
     std::array<Candidate, 64> best{};
     const std::size_t keep = std::min(wanted, best.size());
     std::size_t kept = 0;
-    for (std::size_t i = 0; i < probes_.size(); ++i) {
-        const glm::dvec3 to = probes_[i].position - ray.origin;
+    for (std::size_t i = 0; i < probe_count(); ++i) {
+        const glm::dvec3 to = probe_position(i) - ray.origin;
         const Candidate c{glm::dot(to, to), i};
         if (kept < keep) {
             best[kept++] = c;
@@ -368,7 +418,7 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
             const std::size_t corner_count = grid_cell_corners(grid(), span->cell, corner_index);
             std::array<Candidate, 8> corners{};
             for (std::size_t k = 0; k < corner_count; ++k) {
-                const glm::dvec3 to = probes_[corner_index[k]].position - entry;
+                const glm::dvec3 to = probe_position(corner_index[k]) - entry;
                 corners[k] = Candidate{glm::dot(to, to), corner_index[k]};
             }
             sort_candidates(corners.data(), corner_count);

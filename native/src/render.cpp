@@ -52,7 +52,7 @@ namespace {
 // The probe the eye sits at (within the trace's eye-at-probe distance), or -1.
 int probe_at(const ProbeField& field, const glm::dvec3& eye, const TraceSettings& settings) {
     for (std::size_t i = 0; i < field.probe_count(); ++i) {
-        if (glm::length(eye - field.probe(i).position) <= settings.eye_at_probe_distance) {
+        if (glm::length(eye - field.probe_position(i)) <= settings.eye_at_probe_distance) {
             return static_cast<int>(i);
         }
     }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -15,6 +16,7 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/probe_field.hpp"
 #include "lfprobe/probe_set.hpp"
+#include "lfprobe/render.hpp"
 #include "trace_scenes.hpp"
 
 using namespace lfprobe;
@@ -292,4 +294,72 @@ TEST(Grid, ProbeSetsLoadFromDiskAndModesAreChecked) {
     EXPECT_EQ(field_mode_from_name("grid"), FieldMode::Grid);
     EXPECT_THROW((void)field_mode_from_name("octree"), InputError);
     EXPECT_THROW(ProbeField(ProbePlacement::from_grid(grid), {}), InputError);
+}
+
+TEST(Grid, ALazilyOpenedSetReadsOnlyTheProbesARayReachesAndRendersTheSameImage) {
+    // A row of 4 probes; a view from the first probe's side looking along the row's axis away
+    // from the others reaches few of them. Opened lazily, the set reads no probe until a ray
+    // needs it, renders the image an eager load renders bit for bit, and names a missing probe
+    // file when it opens.
+    const BoxRoomScene room;
+    const PointCloud cloud = room.cloud(0.05f, glm::dvec3(0.0, 0.0, 1.2));
+    const ProbeGrid grid = ProbeGrid::spanning({-1.2, 0.0, 1.2}, {1.2, 0.0, 1.2}, {4, 1, 1});
+    BakeSettings bake;
+    bake.resolution = 32;
+    const std::filesystem::path folder =
+        std::filesystem::temp_directory_path() /
+        ("lfprobe_lazy_test_" + std::to_string(std::random_device{}()));
+    (void)bake_probe_set_from_cloud(cloud, ProbePlacement::from_grid(grid), bake, {},
+                                    folder.string(), nlohmann::json::array());
+    const ProbeField eager = ProbeField::load(folder.string());
+    const ProbeField lazy = ProbeField::load(folder.string(), nullptr, 0, {}, true);
+    EXPECT_EQ(eager.loaded_probe_count(), 4u);
+    EXPECT_EQ(lazy.loaded_probe_count(), 0u);
+    EXPECT_EQ(lazy.memory_bytes(), 0u);
+    EXPECT_EQ(lazy.probe_position(3), eager.probe_position(3));
+    const Camera camera = Camera::look_at({-1.3, 0.0, 1.2}, {-2.0, 0.3, 1.0}, 48, 32, 20.0);
+    const RenderSettings settings;
+    const RenderedImage a = render_probe_view(eager, camera, settings);
+    const RenderedImage b = render_probe_view(lazy, camera, settings);
+    EXPECT_GT(lazy.loaded_probe_count(), 0u);
+    EXPECT_LT(lazy.loaded_probe_count(), 4u) << "the view reaches only the probes near it";
+    ASSERT_EQ(a.rgba, b.rgba);
+    ASSERT_EQ(a.status, b.status);
+    ASSERT_EQ(a.probe, b.probe);
+    // A copy shares what is loaded; the rest loads on its first use.
+    const ProbeField copy = lazy;
+    EXPECT_EQ(copy.loaded_probe_count(), lazy.loaded_probe_count());
+    EXPECT_EQ(copy.probe(3).resolution, 32);
+    EXPECT_EQ(lazy.probe(3).resolution, 32);
+
+    // A probe file that went missing: opening lazily says which.
+    std::filesystem::remove(folder / eager.manifest().probes[2].file);
+    try {
+        (void)ProbeField::load(folder.string(), nullptr, 0, {}, true);
+        ADD_FAILURE() << "a missing probe file must be an error of opening the set";
+    } catch (const IoError& e) {
+        EXPECT_NE(std::string(e.what()).find(eager.manifest().probes[2].file), std::string::npos)
+            << e.what();
+    }
+    // A probe file that cannot be decoded: the trace that reaches it fails, and so does the
+    // next one (the slot stays empty), with the file named.
+    {
+        std::FILE* f = std::fopen((folder / eager.manifest().probes[2].file).c_str(), "wb");
+        ASSERT_NE(f, nullptr);
+        std::fputs("not an EXR", f);
+        std::fclose(f);
+    }
+    const ProbeField damaged = ProbeField::load(folder.string(), nullptr, 0, {}, true);
+    for (int attempt = 0; attempt < 2; ++attempt) {
+        try {
+            (void)damaged.probe(2);
+            ADD_FAILURE() << "a damaged probe file must be an error of the trace that reads it";
+        } catch (const std::exception& e) {
+            EXPECT_NE(std::string(e.what()).find(eager.manifest().probes[2].file),
+                      std::string::npos)
+                << e.what();
+        }
+    }
+    EXPECT_EQ(damaged.probe(1).resolution, 32);
+    std::filesystem::remove_all(folder);
 }

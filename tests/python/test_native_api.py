@@ -205,3 +205,22 @@ def test_grid_positions_are_the_bakes_with_a_one_probe_axis_at_the_centre(native
     # The defaults every caller reads are the native settings' own.
     assert defaults.trace("thickness") == 0.02 and defaults.bake("splat_scale") == 0.8
     assert defaults.bake("resolution") == 512 and defaults.trace("blend") == 4
+
+
+def test_a_lazily_opened_field_reads_probes_when_traced(native, tmp_path):
+    """ProbeField.load(lazy=True), as Blender's F12 and viewport open a set: nothing but the
+    manifest is read until a ray reaches a probe, and the image is the eager load's."""
+    cloud = box_cloud(native)
+    native.bake_probe_set(cloud, str(tmp_path / "set"), resolution=32, grid_min=[-0.5, -0.5, 1.0],
+                          grid_max=[0.5, 0.5, 1.5], counts=[2, 2, 2])
+    lazy = native.ProbeField.load(str(tmp_path / "set"), lazy=True)
+    eager = native.ProbeField.load(str(tmp_path / "set"))
+    assert (lazy.probe_count, lazy.loaded_probe_count, lazy.memory_bytes) == (8, 0, 0)
+    assert eager.loaded_probe_count == 8
+    camera = json.dumps({"type": "PERSP", "resolution": [24, 16], "lens": 20.0, "sensor_width": 36.0,
+                         "matrix_world": [[1, 0, 0, 0], [0, 0, -1, 0], [0, 1, 0, 1.25], [0, 0, 0, 1]]})
+    image_lazy, _ = lazy.render(camera, threads=2)
+    image_eager, _ = eager.render(camera, threads=2)
+    assert 0 < lazy.loaded_probe_count <= 8
+    for channel in ("rgba", "status"):
+        np.testing.assert_array_equal(image_lazy[channel], image_eager[channel])

@@ -60,7 +60,9 @@ def load_field(folder: str, coarse_resolution: int = 0):
             return cached
         _native = native.load()
         try:
-            loaded = _native.ProbeField.load(folder, coarse_resolution=int(coarse_resolution))
+            # Lazily: F12 and the viewport start tracing at once, and a probe's maps are read
+            # the first time a ray reaches it.
+            loaded = _native.ProbeField.load(folder, coarse_resolution=int(coarse_resolution), lazy=True)
         except (_native.InputError, _native.NativeIOError) as error:
             raise TraceSetupError(f"cannot load the probe set {folder}: {error}") from error
         stale = [k for k in _fields if k[0] == key[0]]

@@ -10,9 +10,11 @@
 // at the grid's box, so surfaces between a camera outside the grid and the grid are seen.
 #pragma once
 
+#include <atomic>
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -69,8 +71,12 @@ struct FieldTraceResult {
 
 class ProbeField {
 public:
-    // Loads the probe set in `folder`: the manifest, every probe and its coarse levels, in
-    // parallel. Progress counts probes; cancellation is honoured between probes.
+    // Opens the probe set in `folder`: the manifest, then every probe and its coarse levels, in
+    // parallel. Progress counts probes; cancellation is honoured between probes. With `lazy`,
+    // only the manifest is read and each probe file is checked to be there: a probe's maps are
+    // decoded the first time a trace asks for them (from any thread, once), so a view starts
+    // at once and loads only the probes it reaches; a probe file that cannot be read is then
+    // an error of that trace.
     // `coarse_resolution` is the size of the coarsest min-distance level kept (the level a
     // trace starts its skipping from): 0 or 1 keeps every level down to 1×1; a larger value
     // drops the levels below it (less memory, more steps per ray). `storage` is how the probes
@@ -78,7 +84,8 @@ public:
     // when it says nothing).
     [[nodiscard]] static ProbeField load(const std::string& folder, Progress* progress = nullptr,
                                          int coarse_resolution = 0,
-                                         const std::optional<ProbeStorage>& storage = {});
+                                         const std::optional<ProbeStorage>& storage = {},
+                                         bool lazy = false);
 
     // A field over probes already in memory, in the placement's index order (probe i of a grid
     // is x + counts[0] * (y + counts[1] * z)). The probes' own positions are where they are
@@ -94,14 +101,24 @@ public:
     [[nodiscard]] const glm::dvec3& world_offset() const { return manifest_.world_offset; }
     [[nodiscard]] bool is_grid() const { return manifest_.placement.is_grid; }
     [[nodiscard]] const ProbeGrid& grid() const { return manifest_.placement.grid; }
-    [[nodiscard]] std::size_t probe_count() const { return probes_.size(); }
-    [[nodiscard]] const ProbeMap& probe(std::size_t i) const { return probes_.at(i); }
-    [[nodiscard]] const MinDistancePyramid& levels(std::size_t i) const { return levels_.at(i); }
+    [[nodiscard]] std::size_t probe_count() const { return manifest_.probes.size(); }
+    // Probe i's maps and coarse levels (read on first use when the set was opened lazily).
+    [[nodiscard]] const ProbeMap& probe(std::size_t i) const { return slot(i).map; }
+    [[nodiscard]] const MinDistancePyramid& levels(std::size_t i) const { return slot(i).levels; }
+    // Where probe i stands and its resolution, without reading its maps.
+    [[nodiscard]] const glm::dvec3& probe_position(std::size_t i) const {
+        return manifest_.probes.at(i).position;
+    }
+    [[nodiscard]] int probe_resolution(std::size_t i) const {
+        return manifest_.probes.at(i).resolution;
+    }
+    // How many probes' maps are in memory (all of them unless opened lazily).
+    [[nodiscard]] std::size_t loaded_probe_count() const;
     // Probe i's prefiltered radiance (the footprint filter's); every probe's are built on the
     // first call, from any thread, and kept: memory only sets that are rendered with it pay.
     [[nodiscard]] const RadianceMips& radiance_mips(std::size_t i) const;
-    // Maps and coarse levels of every probe, and their prefiltered radiance once a render with
-    // the footprint filter has built it.
+    // Maps and coarse levels of every probe in memory, and their prefiltered radiance once a
+    // render with the footprint filter has built it.
     [[nodiscard]] std::size_t memory_bytes() const;
 
     // The mode `settings` asks for, with Auto resolved. InputError for Grid on a set that is
@@ -123,14 +140,25 @@ public:
                                              const TraceSettings& settings = {}) const;
 
 private:
+    // One probe's maps, filled once: at load, or at first use for a lazily opened set.
+    struct ProbeSlot {
+        std::once_flag once;
+        std::atomic<bool> ready{false};
+        ProbeMap map;
+        MinDistancePyramid levels;
+    };
+    struct ProbeSlots;
+
     ProbeField();
-    void build_levels(Progress* progress);
     void check_placement() const;
+    [[nodiscard]] const ProbeSlot& slot(std::size_t i) const;
+    void fill_slot(std::size_t i) const;
 
     ProbeSetManifest manifest_;
     std::string folder_;
-    std::vector<ProbeMap> probes_;
-    std::vector<MinDistancePyramid> levels_;
+    int coarsest_level_ = 1;
+    // Shared, so that copies of a field share what is loaded (the maps never change once read).
+    std::shared_ptr<ProbeSlots> slots_;
     struct RadianceMipCache;
     std::shared_ptr<RadianceMipCache> radiance_mips_;
 };
