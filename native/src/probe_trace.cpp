@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -761,6 +762,45 @@ double surface_thickness(const TraceSettings& settings, double distance, int n) 
     return settings.thickness + thickness_per_metre(settings, n) * distance;
 }
 
+namespace {
+
+// A probe that never saw where the ray starts answers UNKNOWN there, whatever lies beyond: the
+// walk's first texel is the one around the direction to the start, and an unknown texel stops
+// it. In a partial scan most probes a ray asks are such probes, and this answer costs nine
+// texel reads instead of the walk's set-up and its descent through every coarse level. The
+// texels around are read too, so that the texel the walk's own arithmetic picks at an edge or
+// across an octant's fold is unknown as well; a start near the probe centre (where the walk
+// skips the ball the probe stood in) is left to the walk. The answer is the walk's: UNKNOWN,
+// proven free up to the start.
+std::optional<ProbeTraceResult>
+dismiss_if_unknown_at_start(const ProbeMap& map, const glm::dvec3& o, const glm::dvec3& d,
+                            double t_lo, double t_hi, const TraceSettings& settings) {
+    if (!settings.dismiss_unknown_start || !(t_hi > t_lo) || !std::isfinite(t_lo)) {
+        return std::nullopt;
+    }
+    const glm::dvec3 start = o + t_lo * d;
+    const double length = glm::length(start);
+    if (!(length > 2.0 * settings.eye_at_probe_distance) || !std::isfinite(length)) {
+        return std::nullopt;
+    }
+    const int n = map.resolution;
+    const oct::Texel home = oct::texel_of_direction(glm::vec3(start / length), n);
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            const oct::Texel t = oct::wrap_texel(home.x + dx, home.y + dy, n);
+            if (!std::isnan(map.distance_at(oct::texel_index(t, n)))) {
+                return std::nullopt;
+            }
+        }
+    }
+    ProbeTraceResult result;
+    set_unknown(result, home, t_lo);
+    result.fine_steps = 1; // the texel that stopped it, as the walk counts it; no descent
+    return result;
+}
+
+} // namespace
+
 ProbeTraceResult trace_probe(const ProbeMap& map, const MinDistancePyramid* levels, const Ray& ray,
                              const TraceSettings& settings) {
     const glm::dvec3& o = ray.origin;
@@ -770,9 +810,13 @@ ProbeTraceResult trace_probe(const ProbeMap& map, const MinDistancePyramid* leve
     }
     check_inputs(map, ray.direction);
     const glm::dvec3 d = glm::normalize(ray.direction);
-    Tracer tracer(map, levels, o, d, settings);
     const double t_lo = ray.t_min;
     const double t_hi = ray.t_max;
+    if (std::optional<ProbeTraceResult> dismissed =
+            dismiss_if_unknown_at_start(map, o, d, t_lo, t_hi, settings)) {
+        return *dismissed;
+    }
+    Tracer tracer(map, levels, o, d, settings);
     if (!(t_hi > t_lo)) {
         tracer.finish_miss(t_hi);
         return tracer.result();

@@ -240,3 +240,66 @@ TEST(Trace, TheWalkAgreesWithADenseMarch) {
         EXPECT_GE(agree * 100, rays * 99);
     }
 }
+
+TEST(Trace, ARayThroughAFullyUnknownProbeIsDismissedWithoutWalkingItsTexels) {
+    // A probe that saw nothing: every ray is UNKNOWN from its start, answered by one look (one
+    // texel counted, no coarse level descended), where the walk sets up and descends the
+    // pyramid first.
+    const BoxRoomScene scene;
+    const int n = 64;
+    ProbeMap blind = scenes::analytic_probe(scene, glm::dvec3(0.2, -0.1, 1.3), n);
+    for (std::size_t i = 0; i < blind.texel_count(); ++i) {
+        blind.set_unknown(i);
+    }
+    const MinDistancePyramid levels(blind.distance, n);
+    TraceSettings walk;
+    walk.dismiss_unknown_start = false;
+    std::mt19937 rng(5);
+    for (int i = 0; i < 200; ++i) {
+        const glm::dvec3 o = scenes::random_point_in_room(scene, rng, 0.05) - blind.position;
+        const Ray ray = probe_ray(o, scenes::random_unit(rng), 0.1, kInf);
+        const ProbeTraceResult quick = trace_probe(blind, &levels, ray);
+        const ProbeTraceResult walked = trace_probe(blind, &levels, ray, walk);
+        ASSERT_EQ(quick.status, TraceStatus::Unknown);
+        ASSERT_EQ(quick.free_until, walked.free_until) << "ray " << i;
+        ASSERT_EQ(quick.fine_steps, 1u);
+        ASSERT_EQ(quick.coarse_steps, 0u);
+        ASSERT_GT(walked.steps(), quick.steps());
+    }
+}
+
+TEST(Trace, DismissingUnknownStartsNeverChangesTheAnswer) {
+    // Partly seen probes (holes of unknown and of empty texels), rays from anywhere in the room:
+    // the quick look answers exactly what the walk answers, where it answers at all.
+    const BoxRoomScene scene;
+    std::mt19937 rng(33);
+    std::size_t dismissed = 0;
+    for (const int n : {96, 61}) {
+        const glm::dvec3 centre(0.3, -0.2, 1.1);
+        ProbeMap map = scenes::analytic_probe_with_holes(scene, centre, n);
+        // Half the sphere unknown too, as a probe beside a one-station scan sees it.
+        for (int y = 0; y < n; ++y) {
+            for (int x = 0; x < n; ++x) {
+                if (oct::texel_direction({x, y}, n).y > 0.2f) {
+                    map.set_unknown(oct::texel_index({x, y}, n));
+                }
+            }
+        }
+        const MinDistancePyramid levels(map.distance, n);
+        TraceSettings walk;
+        walk.dismiss_unknown_start = false;
+        for (int i = 0; i < 4000; ++i) {
+            const glm::dvec3 o = scenes::random_point_in_room(scene, rng, 0.05) - centre;
+            const double t_min = std::uniform_real_distribution<double>(0.0, 0.8)(rng);
+            const Ray ray = probe_ray(o, scenes::random_unit(rng), t_min, kInf);
+            const ProbeTraceResult quick = trace_probe(map, &levels, ray);
+            const ProbeTraceResult walked = trace_probe(map, &levels, ray, walk);
+            ASSERT_EQ(quick.status, walked.status) << "ray " << i;
+            ASSERT_EQ(quick.t, walked.t) << "ray " << i;
+            ASSERT_EQ(quick.free_until, walked.free_until) << "ray " << i;
+            ASSERT_EQ(quick.radiance, walked.radiance) << "ray " << i;
+            dismissed += quick.steps() < walked.steps() ? 1 : 0;
+        }
+    }
+    EXPECT_GT(dismissed, 1000u) << "the quick look must be taken where it can";
+}

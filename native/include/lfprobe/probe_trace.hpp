@@ -50,6 +50,10 @@ struct TraceSettings {
     // crossing times settling ties (false: compare the crossing times of every edge; the answer
     // is the same, only slower; for tests and measurements).
     bool order_by_image = true;
+    // Answer UNKNOWN at once where the probe never saw the ray's start (the texels around the
+    // direction to it are unknown), without setting up the walk (false: walk; the answer is
+    // the same, only slower; for tests and measurements).
+    bool dismiss_unknown_start = true;
     // A ray origin closer than this (metres) to the probe centre is at the probe: its answer is
     // one texel lookup.
     double eye_at_probe_distance = 1e-9;
