@@ -15,7 +15,7 @@ import tempfile
 import time
 
 from . import native
-from .bench import room_cloud, room_surface_area, write_results, write_room_obj
+from .bench import SHARED_PUMP_XYZ, room_cloud, room_surface_area, write_results, write_room_obj
 from .camera_json import camera_dict
 from .embree_rates import embree_rates
 
@@ -110,6 +110,57 @@ def _trace_row(_native, field, mesh, name: str, text: str) -> dict:
     return row
 
 
+# The real pump-room scan as a new user meets it in Blender: Fit Grid's defaults (margin 0.25 m,
+# spacing 1 m: 6 × 6 × 5 probes) at the grid's default 512², one station at the origin.
+PUMP_VIEW = {"position": [-0.5, -2.5, 0.2], "look_at": [-2.5, -4.5, -0.5], "res": (320, 180)}
+
+
+def real_scan_row(_native, tmp: str) -> dict:
+    """The pump room through the probes Fit Grid gives it: opening the set (every probe read,
+    or lazily as the add-on does), the first frame, and rays per second, texels and probes per
+    ray on 1 and 2 threads."""
+    from .grid_fit import counts_for_spacing, fitted_box
+
+    pump = os.path.abspath(SHARED_PUMP_XYZ)
+    cloud = _native.load_scans([pump], scanners=[[0.0, 0.0, 0.0]], cache_dir="")
+    positions = cloud.positions
+    low, high = fitted_box([positions.min(axis=0), positions.max(axis=0)], 0.25)
+    counts = counts_for_spacing(high - low, 1.0)
+    offset = list(cloud.world_offset)
+    folder = os.path.join(tmp, "pump_probes")
+    start = time.perf_counter()
+    _native.bake_probe_set(cloud, folder, resolution=512, grid_min=[float(v) for v in low],
+                           grid_max=[float(v) for v in high], counts=[int(c) for c in counts],
+                           positions_in_world=False)
+    bake_seconds = time.perf_counter() - start
+    world = [p + o for p, o in zip(PUMP_VIEW["position"], offset)]
+    target = [p + o for p, o in zip(PUMP_VIEW["look_at"], offset)]
+    text = json.dumps(camera_dict(world, target, PUMP_VIEW["res"], lens=24))
+    start = time.perf_counter()
+    eager = _native.ProbeField.load(folder)
+    open_all = time.perf_counter() - start
+    del eager
+    start = time.perf_counter()
+    lazy = _native.ProbeField.load(folder, lazy=True)
+    open_lazy = time.perf_counter() - start
+    start = time.perf_counter()
+    lazy.render(text, threads=2)
+    first_frame = time.perf_counter() - start
+    row = {"view": "pump room (real scan, Fit Grid defaults)", "counts": list(counts),
+           "probes": int(counts[0] * counts[1] * counts[2]), "bake_seconds": bake_seconds,
+           "unknown_texels": _unknown_texels(folder), "open_all_seconds": open_all,
+           "open_lazy_seconds": open_lazy, "first_frame_seconds": first_frame,
+           "probes_read_by_first_frame": lazy.loaded_probe_count}
+    for threads in (1, 2):
+        stats = _best_render(lazy, text, threads)
+        row[f"rays_per_second_{threads}_threads"] = stats["rays_per_second"]
+        row["texels_per_ray"] = stats["mean_steps"]
+        row["probes_per_ray"] = stats["mean_probes"]
+        row["unknown_rays"] = stats["unknown"] / stats["rays"]
+    shutil.rmtree(folder, ignore_errors=True)
+    return row
+
+
 def main(args) -> int:
     _native = native.load()
     tmp = tempfile.mkdtemp(prefix="lfprobe-bench-render-")
@@ -164,6 +215,25 @@ def main(args) -> int:
                   f"({row['trace_texels_per_ray']:.1f} texels/ray); splatting the cloud "
                   f"{row['splat_ms_per_frame']:.1f} ms ({row['splat_points_per_second'] / 1e6:.1f} M "
                   f"points/s): splat/trace = {row['splat_over_trace']:.2f}\n")
+        if os.path.isfile(os.path.abspath(SHARED_PUMP_XYZ)):
+            print("== the real pump-room scan, one station, Fit Grid's defaults, 512² probes ==")
+            pump = real_scan_row(_native, tmp)
+            results["real_scan"] = pump
+            complete = next((r for r in results["trace"] if r["view"] == "between probes"), None)
+            print(f"  {pump['counts'][0]}×{pump['counts'][1]}×{pump['counts'][2]} probes baked in "
+                  f"{pump['bake_seconds']:.1f} s, {100 * pump['unknown_texels']:.1f}% of texels unknown\n"
+                  f"  opening the set: {pump['open_all_seconds']:.2f} s reading every probe, "
+                  f"{pump['open_lazy_seconds']:.3f} s lazily (as F12 and the viewport do); first "
+                  f"{PUMP_VIEW['res'][0]}×{PUMP_VIEW['res'][1]} frame {pump['first_frame_seconds']:.2f} s, "
+                  f"reading {pump['probes_read_by_first_frame']} of {pump['probes']} probes\n"
+                  f"  {pump['rays_per_second_1_threads'] / 1e6:.3f} / {pump['rays_per_second_2_threads'] / 1e6:.3f} M rays/s "
+                  f"on 1 / 2 threads, {pump['texels_per_ray']:.0f} texels and {pump['probes_per_ray']:.1f} probes "
+                  f"per ray, {100 * pump['unknown_rays']:.0f}% of rays UNKNOWN")
+            if complete is not None:
+                ratio = complete["trace_only_rays_per_second_2_threads"] / pump["rays_per_second_2_threads"]
+                pump["complete_over_partial"] = ratio
+                print(f"  the complete scan's 'between probes' view ({complete['points']:,} points) "
+                      f"traces {ratio:.1f}× as many rays per second (the aim: within 2×)")
         print("summary: points, unknown texels, probe trace ms/frame, splat ms/frame")
         for row in results["sizes"]:
             print(f"  {row['points']:>12,}  {100 * row['unknown_texels']:6.2f}%  "
