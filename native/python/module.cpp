@@ -231,6 +231,18 @@ PYBIND11_MODULE(_native, m) {
     static py::exception<InputError> input_error(m, "InputError", PyExc_ValueError);
     static py::exception<IoError> io_error(m, "NativeIOError", PyExc_OSError);
     static py::exception<Cancelled> cancelled(m, "Cancelled", PyExc_Exception);
+    // A missing input file is both a native I/O error and Python's FileNotFoundError, so that
+    // code catching either sees it (and the command line exits 2, as for other bad input).
+    static py::object missing_file = [&] {
+        py::object bases = py::make_tuple(io_error, py::handle(PyExc_FileNotFoundError));
+        py::object type = py::reinterpret_steal<py::object>(
+            PyErr_NewException("lfprobe._native.MissingFileError", bases.ptr(), nullptr));
+        if (!type) {
+            throw py::error_already_set();
+        }
+        m.attr("MissingFileError") = type;
+        return type;
+    }();
     // Messages quote what the input held, which need not be UTF-8 (a camera file's bytes):
     // such bytes come through as \xNN escapes instead of losing the whole message.
     py::register_exception_translator([](std::exception_ptr p) {
@@ -246,6 +258,8 @@ PYBIND11_MODULE(_native, m) {
             }
         } catch (const InputError& e) {
             raise(input_error, e.what());
+        } catch (const MissingFileError& e) {
+            raise(missing_file, e.what());
         } catch (const IoError& e) {
             raise(io_error, e.what());
         } catch (const Cancelled& e) {

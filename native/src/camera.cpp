@@ -19,6 +19,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <numbers>
 
@@ -474,6 +475,12 @@ double Camera::pixels_per_tangent() const {
 }
 
 Camera read_camera_json(const std::string& path) {
+    std::error_code missing;
+    if (!std::filesystem::is_regular_file(path, missing)) {
+        throw MissingFileError(
+            path + ": cannot open the camera file (" +
+            (std::filesystem::exists(path, missing) ? "not a regular file" : "no such file") + ")");
+    }
     std::ifstream in(path);
     if (!in) {
         throw IoError(path + ": cannot open the camera file");

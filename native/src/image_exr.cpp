@@ -132,7 +132,7 @@ void write_rendered_exr(const std::string& path, const RenderedImage& image,
 
 RenderedImage read_rendered_exr(const std::string& path, std::string* metadata) {
     if (!std::filesystem::exists(path)) {
-        throw IoError(path + ": no such image");
+        throw MissingFileError(path + ": no such image");
     }
     try {
         Imf::InputFile file(path.c_str());

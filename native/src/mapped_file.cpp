@@ -17,7 +17,11 @@ namespace lfprobe {
 namespace {
 
 [[noreturn]] void throw_system_error(const std::string& path, const char* action, int error) {
-    throw IoError(path + ": cannot " + action + " (" + std::strerror(error) + ")");
+    const std::string message = path + ": cannot " + action + " (" + std::strerror(error) + ")";
+    if (error == ENOENT || error == ENOTDIR) {
+        throw MissingFileError(message);
+    }
+    throw IoError(message);
 }
 
 // Closes the descriptor on every path out of the constructor; the mapping outlives it.
@@ -49,7 +53,7 @@ MappedFile::MappedFile(const std::string& path) : path_(path) {
         throw_system_error(path, "stat", errno);
     }
     if (!S_ISREG(info.st_mode)) {
-        throw IoError(path + ": cannot open (not a regular file)");
+        throw MissingFileError(path + ": cannot open (not a regular file)");
     }
     size_ = static_cast<std::size_t>(info.st_size);
     if (size_ == 0) {

@@ -58,7 +58,7 @@ constexpr std::uintmax_t kMaxObjBytes = std::uintmax_t{8} << 30;
 std::string read_text(const std::string& path, const char* what, std::uintmax_t max_bytes) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) {
-        throw IoError(
+        throw MissingFileError(
             path + ": cannot open " + what +
             (std::filesystem::exists(path, ec) ? " (not a regular file)" : " (no such file)"));
     }
@@ -167,6 +167,9 @@ void read_mtl(const std::string& path, std::vector<Material>& materials,
                 std::shared_ptr<const Texture> tex;
                 try {
                     tex = std::make_shared<const Texture>(Texture::load(file));
+                } catch (const MissingFileError& e) {
+                    throw MissingFileError(path + ":" + std::to_string(line) +
+                                           ": map_Kd: " + e.what());
                 } catch (const IoError& e) {
                     throw IoError(path + ":" + std::to_string(line) + ": map_Kd: " + e.what());
                 }

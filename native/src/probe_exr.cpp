@@ -85,7 +85,7 @@ void write_probe_exr(const std::string& path, const ProbeMap& map) {
 ProbeMap read_probe_exr(const std::string& path) {
     use_all_cores_for_exr();
     if (!std::filesystem::exists(path)) {
-        throw IoError(path + ": no such probe file");
+        throw MissingFileError(path + ": no such probe file");
     }
     try {
         Imf::InputFile file(path.c_str());

@@ -248,8 +248,8 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
             const fs::path path = fs::path(folder) / record.file;
             std::error_code error;
             if (!fs::is_regular_file(path, error)) {
-                throw IoError(path.string() + ": no such probe file (listed in " + folder +
-                              "/manifest.json)");
+                throw MissingFileError(path.string() + ": no such probe file (listed in " + folder +
+                                       "/manifest.json)");
             }
         }
         return field;

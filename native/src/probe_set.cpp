@@ -164,9 +164,13 @@ ProbeSetManifest ProbeSetManifest::from_json(const json& j, const std::string& w
 
 ProbeSetManifest read_manifest(const std::string& folder) {
     const std::string path = (fs::path(folder) / kManifestName).string();
+    std::error_code missing;
+    if (!fs::is_regular_file(path, missing)) {
+        throw MissingFileError(path + ": no probe set manifest here (was the bake finished?)");
+    }
     std::ifstream in(path);
     if (!in) {
-        throw IoError(path + ": no probe set manifest here (was the bake finished?)");
+        throw IoError(path + ": cannot read the probe set manifest");
     }
     json j;
     try {

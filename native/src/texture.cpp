@@ -14,10 +14,10 @@ namespace lfprobe {
 Texture Texture::load(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) {
-        throw IoError(path + ": texture file not found");
+        throw MissingFileError(path + ": texture file not found");
     }
     if (!std::filesystem::is_regular_file(path, ec)) {
-        throw IoError(path + ": cannot open the texture (not a regular file)");
+        throw MissingFileError(path + ": cannot open the texture (not a regular file)");
     }
     int w = 0;
     int h = 0;

@@ -31,6 +31,14 @@ public:
     explicit IoError(const std::string& message) : std::runtime_error(message) {}
 };
 
+// An input file that is not there, or is not a regular file (a folder, a FIFO, a device): bad
+// input, as a malformed file is. Mapped to Python's FileNotFoundError (and NativeIOError), so
+// the command line exits 2 for it as for every other bad input.
+class MissingFileError : public IoError {
+public:
+    explicit MissingFileError(const std::string& message) : IoError(message) {}
+};
+
 // Work stopped because the user asked (Esc in Blender, Ctrl-C). Mapped to KeyboardInterrupt.
 class Cancelled : public std::runtime_error {
 public:
