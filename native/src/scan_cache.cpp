@@ -21,14 +21,19 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/mapped_file.hpp"
 
+// xxHash as a header-only library (Debian's libxxhash-dev): nothing to link.
+#define XXH_INLINE_ALL
+#include <xxhash.h>
+
 namespace lfprobe {
 
 namespace {
 
 namespace fs = std::filesystem;
 
-// Raise whenever the layout below or the meaning of parsed values changes.
-constexpr std::uint32_t cache_version = 1;
+// Raise whenever the layout below or the meaning of parsed values changes. 2: the payload's
+// checksum.
+constexpr std::uint32_t cache_version = 2;
 constexpr std::array<char, 8> cache_magic{'L', 'F', 'P', 'C', 'A', 'C', 'H', 'E'};
 
 enum CacheFlags : std::uint32_t {
@@ -52,9 +57,13 @@ struct CacheHeader {
     std::uint32_t reserved;
     std::array<double, 3> origin;
     std::array<double, 3> scanner;
+    // XXH3-64 of everything after the header (path, columns, arrays): an entry whose values
+    // were changed after it was written (a NaN or 3e38 where the scan had a point) is not
+    // trusted, but parsed again, as the readers' checks would refuse it.
+    std::uint64_t payload_hash;
 };
 static_assert(std::is_trivially_copyable_v<CacheHeader>);
-static_assert(sizeof(CacheHeader) == 104, "the header layout is part of the cache format");
+static_assert(sizeof(CacheHeader) == 112, "the header layout is part of the cache format");
 
 // What identifies the content of a parsed file.
 struct CacheKey {
@@ -164,6 +173,9 @@ template <class T>
             return std::nullopt;
         }
         const char* cursor = mapped.data() + sizeof(header);
+        if (XXH3_64bits(cursor, mapped.size() - sizeof(header)) != header.payload_hash) {
+            return std::nullopt;
+        }
         if (std::string_view(cursor, header.path_bytes) != key.absolute_path ||
             std::string_view(cursor + header.path_bytes, header.columns_bytes) != key.columns) {
             return std::nullopt;
@@ -255,6 +267,22 @@ void write_entry(const fs::path& entry, const CacheKey& key, const ScanFile& sca
     header.columns_bytes = static_cast<std::uint32_t>(key.columns.size());
     header.origin = {scan.origin.x, scan.origin.y, scan.origin.z};
     header.scanner = {scan.scanner.x, scan.scanner.y, scan.scanner.z};
+    {
+        XXH3_state_t state;
+        XXH3_64bits_reset(&state);
+        const auto add = [&](const void* data, std::size_t bytes) {
+            if (bytes > 0) {
+                XXH3_64bits_update(&state, data, bytes);
+            }
+        };
+        add(key.absolute_path.data(), key.absolute_path.size());
+        add(key.columns.data(), key.columns.size());
+        add(scan.positions.data(), scan.positions.size() * sizeof(glm::vec3));
+        add(scan.colors.data(), scan.colors.size() * sizeof(glm::vec3));
+        add(scan.normals.data(), scan.normals.size() * sizeof(glm::vec3));
+        add(scan.intensities.data(), scan.intensities.size() * sizeof(float));
+        header.payload_hash = XXH3_64bits_digest(&state);
+    }
 
     const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
     if (fd < 0) {

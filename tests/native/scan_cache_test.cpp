@@ -5,6 +5,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -182,6 +183,18 @@ TEST(CacheScan, DamagedEntriesAreIgnoredAndRewritten) {
         file.write(reinterpret_cast<const char*>(&huge), sizeof(huge));
     });
     damage_and_check("garbage", [&] { write_file(entry, std::string(size, '\x7f')); });
+    // Issue 22, item 7: the header still matches the scan, but a point's values were changed
+    // (a NaN, a 3e38): the checksum refuses the entry, and the scan is parsed again.
+    const auto change_last_point = [&](float value) {
+        return [&entry, value] {
+            const auto bytes = fs::file_size(entry);
+            std::fstream file(entry, std::ios::binary | std::ios::in | std::ios::out);
+            file.seekp(static_cast<std::streamoff>(bytes - sizeof(float)));
+            file.write(reinterpret_cast<const char*>(&value), sizeof(value));
+        };
+    };
+    damage_and_check("a NaN value", change_last_point(std::numeric_limits<float>::quiet_NaN()));
+    damage_and_check("a 3e38 value", change_last_point(3e38f));
     EXPECT_EQ(files_in(cache).size(), 1u); // no temporary files left behind
 }
 
