@@ -10,6 +10,7 @@ import os
 import bpy
 
 from ...core.camera_json import write_camera
+from ...core.trace_hints import unknown_hint
 from .. import grid as grid_module
 from .. import probe_view
 from ..operators import bake, compare, place_views
@@ -165,6 +166,9 @@ def run_render(args) -> int:
     print(f"lfprobe: rendered {out} from camera '{camera_obj.name}' through grid '{target.grid_name}': "
           f"{rays:,} rays in {stats['seconds'] * 1000:.1f} ms ({stats['rays_per_second'] / 1e6:.2f} M rays/s), "
           f"pixels HIT {100 * stats['hits'] / pixels:.2f}%, UNKNOWN {100 * stats['unknown'] / pixels:.2f}%")
+    hint = unknown_hint(stats, target.camera, target.folder)
+    if hint:
+        print(f"lfprobe: {hint}")
     return EXIT_OK
 
 

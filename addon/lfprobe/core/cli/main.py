@@ -18,6 +18,7 @@ from . import compare as compare_cli, mesh as mesh_cli, place as place_cli, repo
 from ..pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh, bake_from_scans
 from ..probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
 from ..probe_storage import describe as describe_storage
+from ..trace_hints import camera_of, unknown_hint
 from ..progress import TerminalProgress
 from .arguments import (COLUMNS_HELP, SCAN_HELP, add_placement_arguments, add_plan_arguments, add_storage_arguments,
                         bake_storage, plan_options, triples)
@@ -183,6 +184,9 @@ def _cmd_render(args) -> int:
     print(f"  pixels HIT {100 * stats['hits'] / pixels:.2f}%, MISS {100 * stats['misses'] / pixels:.2f}%, "
           f"UNKNOWN {100 * stats['unknown'] / pixels:.2f}%; {stats['mean_steps']:.1f} texels and "
           f"{stats['mean_probes']:.2f} probes per ray")
+    hint = unknown_hint(stats, camera_of(args.camera), args.probes)
+    if hint:
+        print(f"  {hint}")
     return 0
 
 
