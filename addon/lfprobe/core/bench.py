@@ -13,7 +13,7 @@ import time
 import numpy as np
 
 from . import native
-from .bench_formats import library_parse_benchmark
+from .bench_formats import best_of, library_parse_benchmark
 from .probe_set import PAPER_BYTES_PER_2048_PROBE, coarse_level_bytes, summarize
 
 # The project's shared test data: LFPROBE_SHARED_DATA, else ../shared/data beside the checkout.
@@ -21,15 +21,6 @@ SHARED_PUMP_XYZ = os.path.join(
     os.environ.get("LFPROBE_SHARED_DATA")
     or os.path.join(os.path.dirname(__file__), "..", "..", "..", "..", "shared", "data"),
     "scans", "pumpA_xyzrgb.xyz")
-
-
-def _best_of(fn, repeats: int) -> float:
-    best = float("inf")
-    for _ in range(repeats):
-        start = time.perf_counter()
-        fn()
-        best = min(best, time.perf_counter() - start)
-    return best
 
 
 # Axis-aligned boxes of the benchmark room: the room itself (seen from inside), two tables and
@@ -128,12 +119,12 @@ def write_xyz(path: str, positions: np.ndarray, colors_u8: np.ndarray) -> None:
 def parse_benchmark(path: str, label: str, tmp: str, loadtxt_repeats: int) -> dict:
     _native = native.load()
     size = os.path.getsize(path)
-    native_seconds = _best_of(lambda: _native.load_scans([path], cache_dir=""), 3)
+    native_seconds = best_of(lambda: _native.load_scans([path], cache_dir=""), 3)
     points = len(_native.load_scans([path], cache_dir=""))
     cache = os.path.join(tmp, "cache")
     _native.load_scans([path], cache_dir=cache)
-    cached_seconds = _best_of(lambda: _native.load_scans([path], cache_dir=cache), 3)
-    loadtxt_seconds = _best_of(lambda: np.loadtxt(path), loadtxt_repeats)
+    cached_seconds = best_of(lambda: _native.load_scans([path], cache_dir=cache), 3)
+    loadtxt_seconds = best_of(lambda: np.loadtxt(path), loadtxt_repeats)
     return {
         "file": label,
         "bytes": size,

@@ -16,7 +16,8 @@ from .pipeline import load_scans
 from .scan_formats import MissingLibraryError, library
 
 
-def _best_of(fn, repeats: int = 3) -> float:
+def best_of(fn, repeats: int = 3) -> float:
+    """The fastest of `repeats` runs of fn(), in seconds."""
     best = float("inf")
     for _ in range(repeats):
         start = time.perf_counter()
@@ -52,8 +53,8 @@ def library_parse_benchmark(scans_folder: str, tmp: str) -> list:
     try:
         pye57 = library("pye57", "the E57 benchmark")
         if os.path.isfile(e57):
-            ours = _best_of(lambda: load_scans([e57], cache_dir=""))
-            theirs = _best_of(lambda: pye57.E57(e57).read_scan_raw(0))
+            ours = best_of(lambda: load_scans([e57], cache_dir=""))
+            theirs = best_of(lambda: pye57.E57(e57).read_scan_raw(0))
             rows.append(_row("pumpAVisualReferenceImage.e57", e57, ours, theirs, len(load_scans([e57], cache_dir="")),
                              "pye57.E57.read_scan_raw"))
     except MissingLibraryError as error:
@@ -66,8 +67,8 @@ def library_parse_benchmark(scans_folder: str, tmp: str) -> list:
             for suffix in ("las", "laz"):
                 path = os.path.join(tmp, f"autzen.{suffix}")
                 _write_las(autzen, path, laspy)
-                ours = _best_of(lambda: load_scans([path], cache_dir=""))
-                theirs = _best_of(lambda: laspy.read(path))
+                ours = best_of(lambda: load_scans([path], cache_dir=""))
+                theirs = best_of(lambda: laspy.read(path))
                 rows.append(_row(f"autzen.{suffix} (written by laspy)", path, ours, theirs,
                                  len(load_scans([path], cache_dir="")), "laspy.read"))
     except MissingLibraryError as error:
