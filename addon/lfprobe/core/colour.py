@@ -1,6 +1,6 @@
 """Colour encodings, defined once: the sRGB curve (metrics, PNG previews, the viewport texture
-and the scan points drawn in the viewport all encode through `srgb_encode`) and the magma
-map of error images."""
+and the scan points drawn in the viewport all encode through `srgb_encode`; compare decodes
+PNG and JPEG through `srgb_decode`) and the magma map of error images."""
 
 from __future__ import annotations
 
@@ -13,6 +13,14 @@ def srgb_encode(linear: np.ndarray, dtype=np.float64) -> np.ndarray:
     (float32 for what is drawn, float64 for what is measured)."""
     c = np.clip(np.nan_to_num(np.asarray(linear, dtype=dtype), nan=0.0), 0.0, 1.0)
     return np.where(c <= 0.0031308, 12.92 * c, 1.055 * np.power(c, 1.0 / 2.4) - 0.055)
+
+
+def srgb_decode(encoded: np.ndarray, dtype=np.float64) -> np.ndarray:
+    """sRGB-encoded colour in [0, 1] → linear, the inverse of `srgb_encode`: clamp to [0, 1]
+    (NaN → 0), then c/12.92 up to 0.04045 and ((c + 0.055)/1.055)^2.4 above (PNG and JPEG
+    images that compare reads are sRGB)."""
+    c = np.clip(np.nan_to_num(np.asarray(encoded, dtype=dtype), nan=0.0), 0.0, 1.0)
+    return np.where(c <= 0.04045, c / 12.92, np.power((c + 0.055) / 1.055, 2.4))
 
 
 def srgb8(linear_rgb: np.ndarray) -> np.ndarray:

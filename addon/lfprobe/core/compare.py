@@ -1,7 +1,11 @@
 """A view measured against ground truth of the same camera: read both images, compute every
 figure of lfprobe.core.metrics, write the FLIP error map and previews as PNG and the figures as
-JSON. `lfprobe compare` measures two EXR files with `compare_files`; the add-on's Compare
-renders ground truth and probes into a report folder and measures them with `CompareReport`."""
+JSON. `lfprobe compare` measures two image files with `compare_files` (lfprobe's own EXRs, other
+EXRs, PNG and JPEG: core/image_files.py); the add-on's Compare renders ground truth and probes
+into a report folder and measures them with `CompareReport`. Colour metrics are computed for any
+pair; depth and the HIT/MISS/UNKNOWN figures only where both images carry lfprobe's status and
+depth planes, and the figures say which were computed (`computed`) and why the others were not
+(`not_computed`)."""
 
 from __future__ import annotations
 
@@ -20,6 +24,7 @@ from .camera_json import write_camera
 from .colour import magma8, srgb8
 from .errors import InputError
 from .flip import DEFAULT_PPD
+from .image_files import read_any_image
 from .json_values import strict_json
 
 
@@ -67,25 +72,38 @@ def write_png(path: str, rgb8: np.ndarray) -> None:
 
 
 def measure(reference: dict, test: dict, ppd: float = DEFAULT_PPD) -> Tuple[Dict[str, object], np.ndarray]:
-    """(the figures of metrics.compare_images_with_map plus compare_seconds, FLIP error map)."""
+    """(the figures of metrics.compare_images_with_map plus compare_seconds, computed and
+    not_computed, FLIP error map). Two lfprobe renders (status planes in both) are measured
+    exactly as they always were; any other pair by metrics.compare_colour_with_map."""
     start = time.perf_counter()
-    result, error_map = metrics.compare_images_with_map(reference, test, ppd=ppd)
+    if "status" in reference and "status" in test:
+        result, error_map = metrics.compare_images_with_map(reference, test, ppd=ppd)
+    else:
+        result, error_map = metrics.compare_colour_with_map(reference, test, ppd=ppd)
     result["compare_seconds"] = time.perf_counter() - start
+    result["computed"], result["not_computed"] = metrics.availability(reference, test, result["ssim"])
     return result, error_map
 
 
 def compare_files(reference_path: str, test_path: str, ppd: float = DEFAULT_PPD,
                   error_map_path: Optional[str] = None) -> Dict[str, object]:
     """The figures of a test image against a reference image (`lfprobe compare`), with both
-    renders' own times; writes the FLIP error as a magma PNG when `error_map_path` is given."""
+    renders' own times and what each file was (`reference_source`, `test_source`); writes the
+    FLIP error as a magma PNG when `error_map_path` is given. FileNotFoundError for a missing
+    file, InputError naming the file for one that cannot be read or images of different sizes."""
     if ppd <= 0:
         raise ValueError(f"--ppd must be positive, got {ppd}")
-    reference = read_image(reference_path)
-    test = read_image(test_path)
+    reference = read_any_image(reference_path)
+    test = read_any_image(test_path)
+    (h0, w0), (h1, w1) = reference["rgba"].shape[:2], test["rgba"].shape[:2]
+    if (h0, w0) != (h1, w1):
+        raise InputError(f"images differ in size: reference {reference_path} is {w0}×{h0}, "
+                         f"test {test_path} is {w1}×{h1}; compare needs the same camera and size")
     result, error_map = measure(reference, test, ppd)
     result["reference"], result["test"] = os.path.abspath(reference_path), os.path.abspath(test_path)
     result["ref_render_seconds"] = render_seconds(reference)
     result["test_render_seconds"] = render_seconds(test)
+    result["reference_source"], result["test_source"] = reference["source"], test["source"]
     if error_map_path:
         write_png(error_map_path, magma8(error_map))
         result["error_map"] = os.path.abspath(error_map_path)

@@ -244,3 +244,75 @@ def compare_images_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarr
     result.update({"width": int(width), "height": int(height), "ppd": float(ppd),
                    "definitions": dict(DEFINITIONS)})
     return result, error_map
+
+
+# Metrics that need lfprobe's status and depth planes in both images, and why each may be missing.
+GEOMETRY_METRICS = ("depth_absrel", "depth_rmse", "wrong_surface_rate", "hole_rate", "false_hit_rate",
+                    "false_miss_rate", "unknown_rate")
+COLOUR_METRICS = ("psnr", "ssim", "flip")
+
+
+def availability(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
+                 ssim_value: Optional[float]) -> Tuple[list, Dict[str, str]]:
+    """(metrics computed, {metric not computed: why}) for a pair of images: colour metrics
+    always (SSIM unless an image is under 11 pixels on a side), psnr_answered where the test has
+    a status plane, depth and the HIT/MISS/UNKNOWN figures where both have status and depth
+    (lfprobe's own renders: a status says which pixels hit, which other files do not say)."""
+    missing: Dict[str, str] = {}
+    if ssim_value is None:
+        missing["ssim"] = f"images under {SSIM_WINDOW}×{SSIM_WINDOW} pixels"
+    lacking = [name for name, image in (("reference", ref), ("test", test))
+               if "status" not in image or "depth" not in image]
+    if lacking:
+        why = (f"the {' and the '.join(lacking)} image{'s have' if len(lacking) > 1 else ' has'} no "
+               "status and depth planes (only lfprobe's rendered EXRs have them)")
+        for name in GEOMETRY_METRICS:
+            missing[name] = why
+    if "status" not in test:
+        missing["psnr_answered"] = "the test image has no status plane (only lfprobe's rendered EXRs have one)"
+    order = COLOUR_METRICS + ("psnr_answered",) + GEOMETRY_METRICS
+    return [name for name in order if name not in missing], missing
+
+
+def compare_colour_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
+                            ppd: float = _flip.DEFAULT_PPD) -> Tuple[Dict[str, object], np.ndarray]:
+    """(metrics, FLIP error map) of a pair that is not two lfprobe renders: the keys of
+    compare_images_with_map, with psnr, ssim and flip on each image's colour (an image with a
+    status plane has its pixels that are not HIT black, as there), psnr_answered where the test
+    has a status, and the depth and confusion figures None (see `availability`)."""
+    if ref["rgba"].shape[:2] != test["rgba"].shape[:2]:
+        h0, w0 = ref["rgba"].shape[:2]
+        h1, w1 = test["rgba"].shape[:2]
+        raise ValueError(f"images differ in size: reference {w0}×{h0}, test {w1}×{h1}")
+    height, width = ref["rgba"].shape[:2]
+
+    def colour(image):
+        if "status" in image:
+            return visible_colour(image)
+        return np.asarray(image["rgba"], dtype=np.float64)[..., :3]
+
+    ref_rgb, test_rgb = colour(ref), colour(test)
+    try:
+        ssim_value: Optional[float] = ssim(ref_rgb, test_rgb)
+    except ValueError:
+        ssim_value = None
+    flip_mean, error_map = flip(ref_rgb, test_rgb, ppd)
+    result: Dict[str, object] = {
+        "psnr": psnr(ref_rgb, test_rgb),
+        "ssim": ssim_value,
+        "flip": flip_mean,
+        "depth_absrel": None,
+        "depth_rmse": None,
+        "depth_pixels": None,
+        "psnr_answered": (psnr_over(ref_rgb, test_rgb, test["status"] != STATUS_UNKNOWN)
+                          if "status" in test else None),
+        "wrong_surface_rate": None,
+        "hole_rate": None,
+        "false_miss_rate": None,
+        "false_hit_rate": None,
+        "unknown_rate": None,
+        "counts": None,
+        "width": int(width), "height": int(height), "ppd": float(ppd),
+        "definitions": dict(DEFINITIONS),
+    }
+    return result, error_map
