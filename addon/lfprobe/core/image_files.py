@@ -338,7 +338,8 @@ def _read_png_jpeg(path: str, data: bytes) -> Dict[str, object]:
         rgba[..., :3] *= rgba[..., 3:4]
     alpha = "A" if values.shape[2] == 4 else ""
     kind = f"{'PNG' if is_png else 'JPEG'} {bits}-bit sRGB{' + alpha' if alpha else ''}"
-    return {"rgba": rgba.astype(np.float32), "source": kind}
+    # Kept in float64: encoding for the metrics then gives back the file's values to ~1e-16.
+    return {"rgba": rgba, "source": kind}
 
 
 # ------------------------------------------------------------------------------------ any image
