@@ -1,4 +1,5 @@
 // Bindings of the renderer: probe-traced views, the splat baseline, rendered images.
+#include <cstdint>
 #include <cstring>
 #include <memory>
 #include <optional>
@@ -14,6 +15,7 @@
 #include "lfprobe/camera.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/image_exr.hpp"
+#include "lfprobe/image_files.hpp"
 #include "lfprobe/probe_field.hpp"
 #include "lfprobe/render.hpp"
 #include "lfprobe/splat_render.hpp"
@@ -295,6 +297,43 @@ void bind_render(py::module_& m) {
         py::arg("path"),
         "A rendered EXR as arrays (h, w[, c]): rgba, depth, normal, status, probe, steps; "
         "metadata is the JSON text the renderer stored.");
+    m.def(
+        "read_exr_channels",
+        [](const std::string& path) {
+            ExrChannels exr;
+            {
+                py::gil_scoped_release release;
+                exr = read_exr_channels(path);
+            }
+            py::dict channels;
+            for (auto& [name, values] : exr.channels) {
+                py::array_t<float> a(
+                    {static_cast<py::ssize_t>(exr.height), static_cast<py::ssize_t>(exr.width)});
+                std::memcpy(a.mutable_data(), values.data(), values.size() * sizeof(float));
+                channels[py::str(name)] = a;
+            }
+            return py::make_tuple(channels, py::make_tuple(exr.width, exr.height));
+        },
+        py::arg("path"),
+        "Every channel of any OpenEXR file (any compression, scanline or tiled, every part) "
+        "over its display window: ({name: (h, w) float32}, (w, h)).");
+    m.def(
+        "read_stored_image",
+        [](const std::string& path) {
+            StoredImage image;
+            {
+                py::gil_scoped_release release;
+                image = read_stored_image(path);
+            }
+            py::array_t<std::uint16_t> a({static_cast<py::ssize_t>(image.height),
+                                          static_cast<py::ssize_t>(image.width),
+                                          static_cast<py::ssize_t>(image.channels)});
+            std::memcpy(a.mutable_data(), image.values.data(),
+                        image.values.size() * sizeof(std::uint16_t));
+            return py::make_tuple(a, image.bits);
+        },
+        py::arg("path"),
+        "A PNG's or JPEG's stored codes (stb_image, 8 or 16 bits): ((h, w, c) uint16, bits).");
 }
 
 } // namespace lfprobe::python
