@@ -4,6 +4,7 @@
 #include <exception>
 #include <filesystem>
 #include <memory>
+#include <type_traits>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
@@ -123,39 +124,27 @@ StoredImage read_stored_image(const std::string& path) {
                          std::to_string(kMaxImagePixels) + " are read)");
     }
     StoredImage image;
-    const bool sixteen = stbi_is_16_bit(path.c_str()) != 0;
-    const auto count = [&] {
-        return static_cast<std::size_t>(image.width) * static_cast<std::size_t>(image.height) *
-               static_cast<std::size_t>(image.channels);
+    // stb_image's 8- and 16-bit loaders differ only in their sample type.
+    const auto load = [&](auto* (*loader)(const char*, int*, int*, int*, int), int bits) {
+        using Sample =
+            std::remove_pointer_t<decltype(loader(nullptr, nullptr, nullptr, nullptr, 0))>;
+        std::unique_ptr<Sample, void (*)(void*)> pixels(
+            loader(path.c_str(), &image.width, &image.height, &image.channels, 0), stbi_image_free);
+        if (!pixels) {
+            const char* reason = stbi_failure_reason();
+            throw InputError(path + ": cannot decode the image (" +
+                             (reason != nullptr ? reason : "damaged") + ")");
+        }
+        image.bits = bits;
+        const std::size_t count = static_cast<std::size_t>(image.width) *
+                                  static_cast<std::size_t>(image.height) *
+                                  static_cast<std::size_t>(image.channels);
+        image.values.assign(pixels.get(), pixels.get() + count);
     };
-    if (sixteen) {
-        std::unique_ptr<stbi_us, void (*)(void*)> pixels(
-            stbi_load_16(path.c_str(), &image.width, &image.height, &image.channels, 0),
-            stbi_image_free);
-        if (!pixels) {
-            const char* reason = stbi_failure_reason();
-            throw InputError(path + ": cannot decode the image (" +
-                             (reason != nullptr ? reason : "damaged") + ")");
-        }
-        image.bits = 16;
-        image.values.resize(count());
-        for (std::size_t i = 0; i < image.values.size(); ++i) {
-            image.values[i] = pixels.get()[i];
-        }
+    if (stbi_is_16_bit(path.c_str()) != 0) {
+        load(&stbi_load_16, 16);
     } else {
-        std::unique_ptr<stbi_uc, void (*)(void*)> pixels(
-            stbi_load(path.c_str(), &image.width, &image.height, &image.channels, 0),
-            stbi_image_free);
-        if (!pixels) {
-            const char* reason = stbi_failure_reason();
-            throw InputError(path + ": cannot decode the image (" +
-                             (reason != nullptr ? reason : "damaged") + ")");
-        }
-        image.bits = 8;
-        image.values.resize(count());
-        for (std::size_t i = 0; i < image.values.size(); ++i) {
-            image.values[i] = pixels.get()[i];
-        }
+        load(&stbi_load, 8);
     }
     return image;
 }

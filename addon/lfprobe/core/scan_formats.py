@@ -18,6 +18,7 @@ from typing import Callable, List, Optional
 
 import numpy as np
 
+from . import colour
 from .errors import InputError
 
 # Versions tools/setup.sh installs (tools/scan_deps.sh); the readers use only long-stable API.
@@ -109,9 +110,8 @@ def read_scan_arrays(path: str, progress: Optional[Callable[[float, str], object
 
 def srgb_decode(encoded: np.ndarray) -> np.ndarray:
     """sRGB-encoded values in [0, 1] → linear, float32 (what the native readers do with 8-bit
-    scan colours)."""
-    c = np.clip(np.asarray(encoded, dtype=np.float64), 0.0, 1.0)
-    return np.where(c <= 0.04045, c / 12.92, np.power((c + 0.055) / 1.055, 2.4)).astype(np.float32)
+    scan colours): core/colour.py's curve."""
+    return colour.srgb_decode(encoded).astype(np.float32)
 
 
 def quaternion_matrix(w: float, x: float, y: float, z: float) -> np.ndarray:
