@@ -230,7 +230,8 @@ PointHierarchy build_point_hierarchy(const PointCloud& cloud, const LocalGeometr
         const float cells = kFinestCellSpacings * spacing / base_cell;
         finest_shift = std::max(1, static_cast<int>(std::ceil(std::log2(std::max(cells, 1.0f)))));
     }
-    const PointColours colour_of(cloud);
+    h.intensity = PointColours::intensity_range(cloud);
+    const PointColours colour_of(cloud, h.intensity);
     for (int shift = finest_shift; shift <= top_shift; ++shift) {
         PointHierarchy::Level level;
         level.shift = shift;

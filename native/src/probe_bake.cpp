@@ -474,21 +474,27 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
     return bake_from(CloudPoints(cloud, geometry), centre, settings, progress);
 }
 
+PointHierarchy hierarchy_for_bakes(const PointCloud& cloud, const LocalGeometry& geometry,
+                                   const BakeSettings& settings, Progress* progress) {
+    return settings.lod_texels > 0.0f ? build_point_hierarchy(cloud, geometry, progress)
+                                      : PointHierarchy{};
+}
+
 ProbeMap bake_probe_from_hierarchy(const PointCloud& cloud, const LocalGeometry& geometry,
                                    const PointHierarchy& hierarchy, const glm::dvec3& centre,
                                    const BakeSettings& settings, Progress* progress) {
     check_bake_arguments(settings, cloud.size(), geometry, centre);
-    if (hierarchy.order.size() != cloud.size()) {
-        throw InputError("bake: the point hierarchy does not belong to this cloud");
-    }
     if (!(settings.lod_texels > 0.0f) || hierarchy.levels.empty()) {
         return bake_from(CloudPoints(cloud, geometry), centre, settings, progress);
+    }
+    if (hierarchy.order.size() != cloud.size()) {
+        throw InputError("bake: the point hierarchy does not belong to this cloud");
     }
     const float texel_angle =
         static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(settings.resolution);
     const HierarchyCut cut =
         cut_for_probe(hierarchy, centre, texel_angle, settings.lod_texels, progress);
-    const PointColours colours(cloud);
+    const PointColours colours(cloud, hierarchy.intensity);
     return bake_from(CutPoints{cloud, geometry, colours, cut}, centre, settings, progress);
 }
 

@@ -234,11 +234,7 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
     }
     field.check_placement();
     if (storage.has_value()) {
-        field.manifest_.storage = *storage;
-        for (ProbeRecord& record : field.manifest_.probes) {
-            const auto n = static_cast<std::size_t>(record.resolution);
-            record.memory_bytes = n * n * storage->bytes_per_texel();
-        }
+        use_storage(field.manifest_, *storage);
     }
     field.slots_ = std::make_shared<ProbeSlots>(count);
     if (lazy) {

@@ -215,9 +215,7 @@ BakeSummary bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry&
                               {"plan", plan.to_json(cloud.world_offset)}});
     manifest.sources = sources;
     const auto hierarchy_start = std::chrono::steady_clock::now();
-    const PointHierarchy hierarchy = settings.bake.lod_texels > 0.0f
-                                         ? build_point_hierarchy(cloud, geometry, progress)
-                                         : PointHierarchy{};
+    const PointHierarchy hierarchy = hierarchy_for_bakes(cloud, geometry, settings.bake, progress);
     const double hierarchy_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - hierarchy_start).count();
     BakeSummary summary = write_probe_set(
@@ -229,11 +227,7 @@ BakeSummary bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry&
             }
             BakeSettings one = settings.bake;
             one.resolution = p.resolution;
-            if (one.lod_texels > 0.0f) {
-                return bake_probe_from_hierarchy(cloud, geometry, hierarchy, p.position, one,
-                                                 progress);
-            }
-            return bake_probe_from_cloud(cloud, geometry, p.position, one, progress);
+            return bake_probe_from_hierarchy(cloud, geometry, hierarchy, p.position, one, progress);
         },
         progress);
     summary.hierarchy_seconds = hierarchy_seconds;

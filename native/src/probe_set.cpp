@@ -208,13 +208,17 @@ ProbeMap read_probe(const std::string& folder, const ProbeSetManifest& manifest,
     return map;
 }
 
-ProbeSetManifest set_probe_set_storage(const std::string& folder, const ProbeStorage& storage) {
-    ProbeSetManifest manifest = read_manifest(folder);
+void use_storage(ProbeSetManifest& manifest, const ProbeStorage& storage) {
     manifest.storage = storage;
     for (ProbeRecord& record : manifest.probes) {
         const auto n = static_cast<std::size_t>(record.resolution);
         record.memory_bytes = n * n * storage.bytes_per_texel();
     }
+}
+
+ProbeSetManifest set_probe_set_storage(const std::string& folder, const ProbeStorage& storage) {
+    ProbeSetManifest manifest = read_manifest(folder);
+    use_storage(manifest, storage);
     write_manifest(folder, manifest);
     return manifest;
 }
@@ -394,9 +398,7 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
     const LocalGeometry geometry = estimate_local_geometry(cloud, geometry_options, progress);
     const double normals_seconds = seconds_since(start);
     const auto hierarchy_start = std::chrono::steady_clock::now();
-    const PointHierarchy hierarchy = settings.lod_texels > 0.0f
-                                         ? build_point_hierarchy(cloud, geometry, progress)
-                                         : PointHierarchy{};
+    const PointHierarchy hierarchy = hierarchy_for_bakes(cloud, geometry, settings, progress);
     const double hierarchy_seconds = seconds_since(hierarchy_start);
 
     ProbeSetManifest manifest;
@@ -412,12 +414,8 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
     BakeSummary summary = write_probe_set(
         folder, std::move(manifest),
         [&](std::size_t i) {
-            if (settings.lod_texels > 0.0f) {
-                return bake_probe_from_hierarchy(cloud, geometry, hierarchy, placement.positions[i],
-                                                 settings, progress);
-            }
-            return bake_probe_from_cloud(cloud, geometry, placement.positions[i], settings,
-                                         progress);
+            return bake_probe_from_hierarchy(cloud, geometry, hierarchy, placement.positions[i],
+                                             settings, progress);
         },
         progress);
     summary.normals_seconds = normals_seconds;

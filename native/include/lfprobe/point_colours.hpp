@@ -14,14 +14,26 @@ namespace lfprobe {
 
 class PointColours {
 public:
-    explicit PointColours(const PointCloud& cloud) : cloud_(cloud) {
+    // The cloud's intensity range, mapped to grey [0, 1]: one pass over the cloud, which a
+    // caller baking many probes keeps (PointHierarchy does) instead of making again per probe.
+    struct IntensityRange {
+        float min = 0.0f;
+        float scale = 0.0f;
+    };
+    [[nodiscard]] static IntensityRange intensity_range(const PointCloud& cloud) {
+        IntensityRange range;
         if (!cloud.has_colors() && !cloud.intensities.empty()) {
             const auto [lo, hi] =
                 std::minmax_element(cloud.intensities.begin(), cloud.intensities.end());
-            intensity_min_ = *lo;
-            intensity_scale_ = *hi > *lo ? 1.0f / (*hi - *lo) : 0.0f;
+            range.min = *lo;
+            range.scale = *hi > *lo ? 1.0f / (*hi - *lo) : 0.0f;
         }
+        return range;
     }
+
+    explicit PointColours(const PointCloud& cloud) : PointColours(cloud, intensity_range(cloud)) {}
+    PointColours(const PointCloud& cloud, IntensityRange range)
+        : cloud_(cloud), intensity_min_(range.min), intensity_scale_(range.scale) {}
     [[nodiscard]] glm::vec3 operator()(std::size_t i) const {
         if (cloud_.has_colors()) {
             return cloud_.colors[i];

@@ -22,6 +22,7 @@
 
 #include "lfprobe/local_geometry.hpp"
 #include "lfprobe/point_cloud.hpp"
+#include "lfprobe/point_colours.hpp"
 #include "lfprobe/progress.hpp"
 
 namespace lfprobe {
@@ -55,6 +56,8 @@ struct PointHierarchy {
         std::vector<CellSurfel> surfels;
         [[nodiscard]] std::size_t cell_count() const { return cell_keys.size(); }
     };
+    // The cloud's intensity range (PointColours), found once for every probe's cut.
+    PointColours::IntensityRange intensity;
     glm::vec3 origin{0.0f};           // the bounding cube's minimum corner, local frame
     float cube_size = 0.0f;           // its edge, metres
     std::vector<std::uint32_t> order; // point indices in Morton order

@@ -48,12 +48,21 @@ struct BakeSettings {
 
 // Bakes one probe from the cut of `hierarchy` (built from the same cloud and geometry) that its
 // resolution needs (settings.lod_texels): the cost follows the probe's texels, not the cloud's
-// points, and far surfaces bake from colours averaged over about a texel. With lod_texels 0
-// it is bake_probe_from_cloud, bit for bit.
+// points, and far surfaces bake from colours averaged over about a texel. With lod_texels 0,
+// or a hierarchy with no levels (an empty one: what a caller builds when lod_texels is 0), it
+// is bake_probe_from_cloud, bit for bit.
 [[nodiscard]] ProbeMap
 bake_probe_from_hierarchy(const PointCloud& cloud, const LocalGeometry& geometry,
                           const PointHierarchy& hierarchy, const glm::dvec3& centre,
                           const BakeSettings& settings, Progress* progress = nullptr);
+
+// The hierarchy bakes with `settings` take from `cloud`: built (build_point_hierarchy) when
+// settings.lod_texels asks for cuts, else empty, which bake_probe_from_hierarchy reads as
+// "every point". Built once, it serves every probe of a set.
+[[nodiscard]] PointHierarchy hierarchy_for_bakes(const PointCloud& cloud,
+                                                 const LocalGeometry& geometry,
+                                                 const BakeSettings& settings,
+                                                 Progress* progress = nullptr);
 
 // Fills holes of at most settings.hole_fill_texels texels across by pull-push over the measured
 // texels, marking them inferred (confidence 0.5 per pyramid level climbed); other texels with no

@@ -51,6 +51,9 @@ struct ProbeSetManifest {
 [[nodiscard]] ProbeSetManifest read_manifest(const std::string& folder);
 void write_manifest(const std::string& folder, const ProbeSetManifest& manifest);
 
+// `manifest` with its probes held as `storage`: the storage and every probe's memory figure.
+void use_storage(ProbeSetManifest& manifest, const ProbeStorage& storage);
+
 // Sets the in-memory storage a set's probes load with (the files are not touched) and the
 // per-probe memory figures of its manifest; the manifest is rewritten atomically.
 ProbeSetManifest set_probe_set_storage(const std::string& folder, const ProbeStorage& storage);
