@@ -29,6 +29,8 @@ constexpr int kTopCellsPerAxisLog2 = 4;
 // already stands for a handful of points.
 constexpr float kFinestCellSpacings = 1.0f;
 constexpr std::size_t kCellChunk = 4096;
+// A cut takes a cell's surfels only where each stands for at least this many points.
+constexpr std::uint32_t kMinPointsPerSurfel = 4;
 
 // Which of the six axis facings a normal has; unoriented normals (arbitrary sign) are turned
 // to the positive side of their dominant axis first, so both signs of one surface meet.
@@ -320,8 +322,12 @@ void collect(const PointHierarchy& h, std::size_t level_index, std::size_t cell,
     const glm::u64vec3 c = morton::cell(level.cell_keys[cell]);
     const glm::vec3 lo = h.origin + glm::vec3(c) * level.cell_size;
     const float d = box_distance(centre, lo, level.cell_size);
-    // One surfel per facing and cell: at most lod_texels texels apart at d?
-    if (level.cell_size <= reach * d) {
+    // One surfel per facing and cell: at most lod_texels texels apart at d? And worth it: a
+    // cell whose surfels stand for hardly more points than they are (a sparse cloud) would
+    // only blur them (its surfels splat wider than its points), so its points are taken.
+    const std::uint32_t points = level.first_point[cell + 1] - level.first_point[cell];
+    const std::uint32_t surfels = level.first_surfel[cell + 1] - level.first_surfel[cell];
+    if (level.cell_size <= reach * d && points >= kMinPointsPerSurfel * surfels) {
         out.surfels.insert(out.surfels.end(), level.surfels.begin() + level.first_surfel[cell],
                            level.surfels.begin() + level.first_surfel[cell + 1]);
         return;
