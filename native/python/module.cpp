@@ -16,6 +16,7 @@
 #include "binding_helpers.hpp"
 #include "bindings.hpp"
 #include "job.hpp"
+#include "lfprobe/cloud_bake.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/mesh_bake.hpp"
 #include "lfprobe/min_distance_pyramid.hpp"
@@ -494,6 +495,7 @@ PYBIND11_MODULE(_native, m) {
     lfprobe::python::bind_render(m);
     lfprobe::python::bind_mesh(m);
     lfprobe::python::bind_plan(m);
+    lfprobe::python::bind_staged_bake(m);
 
     m.def(
         "set_probe_set_storage",

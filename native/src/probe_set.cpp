@@ -10,6 +10,7 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/json_input.hpp"
 #include "lfprobe/probe_exr.hpp"
+#include "lfprobe/probe_set_staging.hpp"
 
 namespace lfprobe {
 
@@ -37,7 +38,6 @@ json coverage_json(const ProbeCoverage& c) {
                 {"unknown", c.unknown}};
 }
 
-// Temporary files (NAME.tmp.PID.N) of a bake that was killed before it could rename them.
 double seconds_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
@@ -48,6 +48,14 @@ std::string probe_file_name(std::size_t index) {
     char name[32];
     std::snprintf(name, sizeof name, "probe_%05zu.exr", index);
     return name;
+}
+
+json probe_record_json(const ProbeRecord& p) {
+    return json{{"file", p.file},
+                {"position", vec_json(p.position)},
+                {"resolution", p.resolution},
+                {"coverage", coverage_json(p.coverage)},
+                {"memory_bytes", p.memory_bytes}};
 }
 
 json ProbeSetManifest::to_json() const {
@@ -66,11 +74,7 @@ json ProbeSetManifest::to_json() const {
     }
     json list = json::array();
     for (const ProbeRecord& p : probes) {
-        list.push_back(json{{"file", p.file},
-                            {"position", vec_json(p.position)},
-                            {"resolution", p.resolution},
-                            {"coverage", coverage_json(p.coverage)},
-                            {"memory_bytes", p.memory_bytes}});
+        list.push_back(probe_record_json(p));
     }
     j["probes"] = list;
     j["bake"] = bake;
@@ -223,156 +227,43 @@ ProbeSetManifest set_probe_set_storage(const std::string& folder, const ProbeSto
     return manifest;
 }
 
-namespace {
-
-BakeSummary write_probe_files(const std::string& folder, ProbeSetManifest manifest,
-                              const std::function<ProbeMap(std::size_t)>& bake_one,
-                              Progress* progress);
-
-// The folder as a path without a trailing separator ("out/set/" names "out/set").
-fs::path set_folder_path(const std::string& folder) {
-    fs::path p = fs::path(folder).lexically_normal();
-    if (!p.has_filename() && p.has_parent_path()) {
-        p = p.parent_path();
-    }
-    return p;
-}
-
-fs::path sibling(const fs::path& folder, const std::string& suffix) {
-    return folder.parent_path() / (folder.filename().string() + suffix);
-}
-
-// A probe set's own files: its manifest, its probes and their temporaries.
-bool is_probe_set_file(const std::string& name) {
-    return name.rfind("probe_", 0) == 0 || name.rfind(kManifestName, 0) == 0;
-}
-
-// A bake replaces `folder` as a whole, so it must hold nothing but an earlier set's files.
-void check_replaceable(const fs::path& folder) {
-    std::error_code ec;
-    if (!fs::exists(folder, ec)) {
-        return;
-    }
-    if (!fs::is_directory(folder, ec)) {
-        throw InputError(folder.string() + ": exists and is not a folder; a probe set is a folder");
-    }
-    for (const auto& entry : fs::directory_iterator(folder, ec)) {
-        const std::string name = entry.path().filename().string();
-        if (!entry.is_regular_file(ec) || !is_probe_set_file(name)) {
-            throw InputError(folder.string() + ": holds \"" + name +
-                             "\", which is not a probe set's file; bake into an empty folder or "
-                             "over an earlier probe set");
-        }
-    }
-}
-
-// Puts the complete set in `staging` where `target` is: the earlier set moves aside first and
-// goes only once the new one is in place.
-void swap_in(const fs::path& staging, const fs::path& target) {
-    std::error_code ec;
-    const fs::path previous = sibling(target, ".previous");
-    fs::remove_all(previous, ec);
-    const bool had_one = fs::exists(target, ec);
-    if (had_one) {
-        fs::rename(target, previous, ec);
-        if (ec) {
-            throw IoError(target.string() + ": cannot move the earlier probe set aside (" +
-                          ec.message() + ")");
-        }
-    }
-    fs::rename(staging, target, ec);
-    if (ec) {
-        if (had_one) {
-            std::error_code back;
-            fs::rename(previous, target, back);
-        }
-        throw IoError(target.string() + ": cannot put the new probe set in place (" + ec.message() +
-                      ")");
-    }
-    fs::remove_all(previous, ec);
-}
-
-} // namespace
-
 BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest,
                             const std::function<ProbeMap(std::size_t)>& bake_one,
                             Progress* progress) {
-    const std::vector<glm::dvec3>& positions = manifest.placement.positions;
-    if (positions.empty()) {
+    const std::size_t count = manifest.placement.positions.size();
+    if (count == 0) {
         throw InputError("bake: no probe positions given");
     }
-    // The set is written into a staging folder beside `folder` and swapped in when complete:
-    // an interrupted bake (cancel, a kill, a full disk) leaves the previous set as it was.
-    const fs::path target = set_folder_path(folder);
-    check_replaceable(target);
-    const fs::path staging = sibling(target, ".partial");
-    std::error_code ec;
-    fs::remove_all(staging, ec); // what a killed bake left
-    fs::create_directories(staging, ec);
-    if (ec) {
-        throw IoError(staging.string() + ": cannot create the probe set's staging folder (" +
-                      ec.message() + ")");
-    }
+    const std::string staging = open_probe_set_staging(folder);
     try {
-        BakeSummary summary =
-            write_probe_files(staging.string(), std::move(manifest), bake_one, progress);
-        swap_in(staging, target);
+        BakeSummary summary;
+        manifest.probes.clear();
+        std::vector<StagedProbe> staged;
+        for (std::size_t i = 0; i < count; ++i) {
+            if (progress != nullptr) {
+                progress->throw_if_cancelled();
+            }
+            auto start = std::chrono::steady_clock::now();
+            const ProbeMap map = bake_one(i);
+            summary.bake_seconds += seconds_since(start);
+            start = std::chrono::steady_clock::now();
+            if (progress != nullptr) {
+                progress->begin_stage(
+                    "writing probe " + std::to_string(i + 1) + " of " + std::to_string(count), 1);
+            }
+            staged.push_back(write_staged_probe(staging, i, map));
+            summary.write_seconds += seconds_since(start);
+            manifest.probes.push_back(staged.back().record);
+        }
+        finish_probe_set_staging(folder, manifest);
+        add_staged_figures(summary, staged);
         summary.folder = folder;
         return summary;
     } catch (...) {
-        fs::remove_all(staging, ec);
+        discard_probe_set_staging(folder);
         throw;
     }
 }
-
-namespace {
-
-BakeSummary write_probe_files(const std::string& folder, ProbeSetManifest manifest,
-                              const std::function<ProbeMap(std::size_t)>& bake_one,
-                              Progress* progress) {
-    const std::vector<glm::dvec3>& positions = manifest.placement.positions;
-    BakeSummary summary;
-    summary.folder = folder;
-    manifest.probes.clear();
-    for (std::size_t i = 0; i < positions.size(); ++i) {
-        if (progress != nullptr) {
-            progress->throw_if_cancelled();
-        }
-        auto start = std::chrono::steady_clock::now();
-        ProbeMap map = bake_one(i);
-        summary.bake_seconds += seconds_since(start);
-        start = std::chrono::steady_clock::now();
-        if (progress != nullptr) {
-            progress->begin_stage("writing probe " + std::to_string(i + 1) + " of " +
-                                      std::to_string(positions.size()),
-                                  1);
-        }
-        const std::string file = probe_file_name(i);
-        const std::string path = (fs::path(folder) / file).string();
-        write_probe_exr(path, map);
-        summary.write_seconds += seconds_since(start);
-        // The map's own position: a planned probe may have been moved off its grid point.
-        ProbeRecord record{file, map.position, map.resolution, coverage_of(map),
-                           map.memory_bytes()};
-        summary.mean_coverage.surface += record.coverage.surface;
-        summary.mean_coverage.inferred += record.coverage.inferred;
-        summary.mean_coverage.empty += record.coverage.empty;
-        summary.mean_coverage.unknown += record.coverage.unknown;
-        summary.bytes_in_memory_per_probe = map.memory_bytes();
-        summary.bytes_on_disk += static_cast<std::size_t>(fs::file_size(path));
-        manifest.probes.push_back(std::move(record));
-    }
-    write_manifest(folder, manifest);
-    const double count = static_cast<double>(manifest.probes.size());
-    summary.probe_count = manifest.probes.size();
-    summary.mean_coverage.surface /= count;
-    summary.mean_coverage.inferred /= count;
-    summary.mean_coverage.empty /= count;
-    summary.mean_coverage.unknown /= count;
-    return summary;
-}
-
-} // namespace
 
 json splat_settings_json(const BakeSettings& settings) {
     return json{{"splat_scale", settings.splat_scale},
@@ -381,46 +272,6 @@ json splat_settings_json(const BakeSettings& settings) {
                 {"hole_fill_texels", settings.hole_fill_texels},
                 {"min_distance", settings.min_distance},
                 {"lod_texels", settings.lod_texels}};
-}
-
-BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,
-                                      const BakeSettings& settings,
-                                      const LocalGeometryOptions& geometry_options,
-                                      const std::string& folder, const json& sources,
-                                      Progress* progress) {
-    if (placement.positions.empty()) {
-        throw InputError("bake: no probe positions given");
-    }
-    if (cloud.size() == 0) {
-        throw InputError("bake: the point cloud is empty");
-    }
-    const auto start = std::chrono::steady_clock::now();
-    const LocalGeometry geometry = estimate_local_geometry(cloud, geometry_options, progress);
-    const double normals_seconds = seconds_since(start);
-    const auto hierarchy_start = std::chrono::steady_clock::now();
-    const PointHierarchy hierarchy = hierarchy_for_bakes(cloud, geometry, settings, progress);
-    const double hierarchy_seconds = seconds_since(hierarchy_start);
-
-    ProbeSetManifest manifest;
-    manifest.world_offset = cloud.world_offset;
-    manifest.placement = placement;
-    manifest.bake = splat_settings_json(settings);
-    manifest.bake.update(json{{"source", "point cloud"},
-                              {"resolution", settings.resolution},
-                              {"normal_neighbours", geometry_options.normal_neighbours},
-                              {"spacing_neighbours", geometry_options.spacing_neighbours},
-                              {"points", cloud.size()}});
-    manifest.sources = sources;
-    BakeSummary summary = write_probe_set(
-        folder, std::move(manifest),
-        [&](std::size_t i) {
-            return bake_probe_from_hierarchy(cloud, geometry, hierarchy, placement.positions[i],
-                                             settings, progress);
-        },
-        progress);
-    summary.normals_seconds = normals_seconds;
-    summary.hierarchy_seconds = hierarchy_seconds;
-    return summary;
 }
 
 } // namespace lfprobe

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "lfprobe/cloud_bake.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/probe_field.hpp"
 #include "lfprobe/probe_set.hpp"

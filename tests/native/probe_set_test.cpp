@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
+#include "lfprobe/cloud_bake.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/probe_exr.hpp"
 #include "lfprobe/probe_set.hpp"

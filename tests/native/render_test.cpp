@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
 
+#include "lfprobe/cloud_bake.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/image_exr.hpp"
 #include "lfprobe/probe_bake.hpp"

@@ -30,6 +30,9 @@ struct ProbeRecord {
     std::size_t memory_bytes = 0;
 };
 
+// A probe's entry in the manifest's "probes" list.
+[[nodiscard]] nlohmann::json probe_record_json(const ProbeRecord& record);
+
 struct ProbeSetManifest {
     int format_version = kProbeSetFormatVersion;
     glm::dvec3 world_offset{0.0};
@@ -88,14 +91,5 @@ struct BakeSummary {
 // The splat settings of a cloud bake as its manifest records them under "bake": one list for
 // every kind of cloud bake, so that a new setting is recorded by all of them.
 [[nodiscard]] nlohmann::json splat_settings_json(const BakeSettings& settings);
-
-// Bakes every probe of `placement` from `cloud` into `folder` (created when missing), one probe
-// at a time so memory stays at one probe's maps, and writes the manifest last. `sources` goes
-// into the manifest as given. On cancellation or error no partial probe file is left behind.
-[[nodiscard]] BakeSummary
-bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,
-                          const BakeSettings& settings,
-                          const LocalGeometryOptions& geometry_options, const std::string& folder,
-                          const nlohmann::json& sources, Progress* progress = nullptr);
 
 } // namespace lfprobe

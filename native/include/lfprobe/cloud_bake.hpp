@@ -1,0 +1,69 @@
+// Baking a probe set from a point cloud, in one process or in parts (docs/DESIGN.md §4). The
+// cloud is made ready once per process (its normals, spacing and point hierarchy), and then any
+// probe of the set bakes from it alone: the same probe comes out bit for bit whichever process
+// bakes it, which is what lets a cluster (core/cluster_bake.py) share a set's probes out.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "lfprobe/local_geometry.hpp"
+#include "lfprobe/point_cloud.hpp"
+#include "lfprobe/point_hierarchy.hpp"
+#include "lfprobe/probe_bake.hpp"
+#include "lfprobe/probe_placement.hpp"
+#include "lfprobe/probe_set.hpp"
+#include "lfprobe/probe_set_staging.hpp"
+#include "lfprobe/progress.hpp"
+
+namespace lfprobe {
+
+// A cloud ready to bake probes from: what every probe's bake reads besides the points.
+struct CloudBakeSource {
+    std::shared_ptr<const PointCloud> cloud;
+    BakeSettings settings;
+    LocalGeometryOptions geometry_options;
+    LocalGeometry geometry;
+    PointHierarchy hierarchy;
+    double normals_seconds = 0.0;
+    double hierarchy_seconds = 0.0;
+};
+
+// Estimates the cloud's local geometry and builds the hierarchy `settings` bake from, on all
+// cores; cancellable through `progress`. InputError for an empty cloud.
+[[nodiscard]] CloudBakeSource prepare_cloud_bake(std::shared_ptr<const PointCloud> cloud,
+                                                 const BakeSettings& settings,
+                                                 const LocalGeometryOptions& geometry_options,
+                                                 Progress* progress = nullptr);
+
+// The manifest of a cloud bake before its probes are listed: world offset, placement, the bake
+// settings and the sources as given.
+[[nodiscard]] ProbeSetManifest cloud_bake_manifest(const PointCloud& cloud,
+                                                   const ProbePlacement& placement,
+                                                   const BakeSettings& settings,
+                                                   const LocalGeometryOptions& geometry_options,
+                                                   const nlohmann::json& sources);
+
+// Bakes the probes `indices` of `placement` from `source` into the staging folder `staging`
+// (open_probe_set_staging), one at a time, each file written atomically; returns what each
+// wrote, in the order of `indices`. Stops with IoError once the staging folder is removed.
+[[nodiscard]] std::vector<StagedProbe> bake_staged_probes(const CloudBakeSource& source,
+                                                          const ProbePlacement& placement,
+                                                          const std::vector<std::size_t>& indices,
+                                                          const std::string& staging,
+                                                          Progress* progress = nullptr);
+
+// Bakes every probe of `placement` from `cloud` into `folder` (created when missing), one probe
+// at a time so memory stays at one probe's maps, and writes the manifest last. `sources` goes
+// into the manifest as given. On cancellation or error no partial probe file is left behind.
+[[nodiscard]] BakeSummary
+bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,
+                          const BakeSettings& settings,
+                          const LocalGeometryOptions& geometry_options, const std::string& folder,
+                          const nlohmann::json& sources, Progress* progress = nullptr);
+
+} // namespace lfprobe

@@ -1,0 +1,219 @@
+// A cloud bake in parts (cloud_bake.hpp, probe_set_staging.hpp), for bakes whose probes other
+// processes bake: core/cluster_bake.py hands them to Dask workers.
+#include <algorithm>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include "binding_helpers.hpp"
+#include "bindings.hpp"
+#include "job.hpp"
+#include "lfprobe/cloud_bake.hpp"
+#include "lfprobe/error.hpp"
+#include "lfprobe/json_input.hpp"
+#include "lfprobe/probe_set_staging.hpp"
+
+namespace py = pybind11;
+
+namespace lfprobe::python {
+
+namespace {
+
+struct CloudBakeOptions {
+    BakeSettings settings;
+    LocalGeometryOptions geometry;
+};
+
+// The bake settings of `bake_probe_set`, as a dict with its keyword arguments' names.
+CloudBakeOptions cloud_bake_options_from(const py::dict& options) {
+    CloudBakeOptions o;
+    for (const auto& item : options) {
+        const auto key = py::str(item.first).cast<std::string>();
+        const py::handle v = item.second;
+        if (key == "resolution") {
+            o.settings.resolution = v.cast<int>();
+        } else if (key == "splat_scale") {
+            o.settings.splat_scale = v.cast<float>();
+        } else if (key == "hole_fill_texels") {
+            o.settings.hole_fill_texels = v.cast<int>();
+        } else if (key == "max_splat_radius_texels") {
+            o.settings.max_splat_radius_texels = v.cast<int>();
+        } else if (key == "lod_texels") {
+            o.settings.lod_texels = v.cast<float>();
+        } else if (key == "normal_neighbours") {
+            o.geometry.normal_neighbours = v.cast<int>();
+        } else {
+            throw InputError("bake settings: unknown setting '" + key + "'");
+        }
+    }
+    return o;
+}
+
+py::dict staged_dict(const StagedProbe& staged) {
+    py::dict d;
+    d["index"] = staged.index;
+    d["record"] = probe_record_json(staged.record).dump();
+    d["bytes_on_disk"] = staged.bytes_on_disk;
+    return d;
+}
+
+} // namespace
+
+void bind_staged_bake(py::module_& m) {
+    py::class_<CloudBakeSource, std::shared_ptr<CloudBakeSource>>(
+        m, "CloudBakeSource",
+        "A cloud ready to bake probes from (normals, spacing, point hierarchy), built once per "
+        "process by start_prepare_cloud_bake.")
+        .def_property_readonly("point_count",
+                               [](const CloudBakeSource& s) { return s.cloud->size(); })
+        .def_property_readonly("normals_seconds",
+                               [](const CloudBakeSource& s) { return s.normals_seconds; })
+        .def_property_readonly("hierarchy_seconds",
+                               [](const CloudBakeSource& s) { return s.hierarchy_seconds; });
+
+    m.def(
+        "start_prepare_cloud_bake",
+        [](std::shared_ptr<PointCloud> cloud, const py::dict& settings) {
+            const CloudBakeOptions options = cloud_bake_options_from(settings);
+            std::shared_ptr<const PointCloud> shared = std::move(cloud);
+            return std::make_unique<Job>(
+                std::function<CloudBakeSource(Progress&)>([shared, options](Progress& progress) {
+                    return prepare_cloud_bake(shared, options.settings, options.geometry,
+                                              &progress);
+                }),
+                std::function<py::object(CloudBakeSource &&)>([](CloudBakeSource&& s) {
+                    return py::cast(std::make_shared<CloudBakeSource>(std::move(s)));
+                }));
+        },
+        py::arg("cloud"), py::arg("settings") = py::dict(),
+        "Start making a cloud ready to bake from; settings as bake_probe_set's keywords "
+        "(resolution, splat_scale, hole_fill_texels, max_splat_radius_texels, normal_neighbours, "
+        "lod_texels). The Job's result is a CloudBakeSource.");
+
+    m.def(
+        "cloud_bake_manifest",
+        [](const PointCloud& cloud, std::vector<std::vector<double>> positions,
+           std::optional<std::vector<double>> grid_min, std::optional<std::vector<double>> grid_max,
+           std::optional<std::vector<int>> counts, bool positions_in_world,
+           const std::string& sources_json, const py::dict& settings) {
+            const CloudBakeOptions options = cloud_bake_options_from(settings);
+            const ProbePlacement placement =
+                placement_from(positions, grid_min, grid_max, counts,
+                               positions_in_world ? cloud.world_offset : glm::dvec3(0.0));
+            if (placement.positions.empty()) {
+                throw InputError("bake: no probe positions given");
+            }
+            const ProbeSetManifest manifest = cloud_bake_manifest(
+                cloud, placement, options.settings, options.geometry, sources_from(sources_json));
+            py::list local;
+            for (const glm::dvec3& p : placement.positions) {
+                local.append(py::make_tuple(p.x, p.y, p.z));
+            }
+            py::dict d;
+            d["manifest"] = manifest.to_json().dump();
+            d["positions"] = local;
+            return d;
+        },
+        py::arg("cloud"), py::arg("positions") = std::vector<std::vector<double>>{},
+        py::arg("grid_min") = py::none(), py::arg("grid_max") = py::none(),
+        py::arg("counts") = py::none(), py::arg("positions_in_world") = true,
+        py::arg("sources_json") = "[]", py::arg("settings") = py::dict(),
+        "The manifest of a cloud bake before its probes are listed (JSON text, 'manifest') and "
+        "the probes' positions in the cloud's local frame ('positions').");
+
+    m.def("probe_set_staging_path", &probe_set_staging_path, py::arg("folder"),
+          "The staging folder of `folder` (FOLDER.partial), where a bake writes until done.");
+    m.def("open_probe_set_staging", &open_probe_set_staging, py::arg("folder"),
+          "Empties and creates the staging folder of `folder`; returns its path. InputError "
+          "when `folder` holds anything but an earlier probe set.");
+    m.def("discard_probe_set_staging", &discard_probe_set_staging, py::arg("folder"),
+          "Removes the staging folder of `folder` (a cancelled or failed bake).");
+
+    m.def(
+        "start_bake_staged_probes",
+        [](std::shared_ptr<CloudBakeSource> source, std::vector<std::vector<double>> positions,
+           std::vector<std::size_t> indices, const std::string& staging) {
+            std::vector<glm::dvec3> local;
+            for (const auto& p : positions) {
+                local.push_back(dvec3_from(p, "probe position"));
+            }
+            auto placement =
+                std::make_shared<const ProbePlacement>(ProbePlacement::from_positions(local));
+            return std::make_unique<Job>(
+                std::function<std::vector<StagedProbe>(Progress&)>(
+                    [source, placement, indices, staging](Progress& progress) {
+                        return bake_staged_probes(*source, *placement, indices, staging, &progress);
+                    }),
+                std::function<py::object(std::vector<StagedProbe> &&)>(
+                    [](std::vector<StagedProbe>&& staged) -> py::object {
+                        py::list out;
+                        for (const StagedProbe& s : staged) {
+                            out.append(staged_dict(s));
+                        }
+                        return out;
+                    }));
+        },
+        py::arg("source"), py::arg("positions"), py::arg("indices"), py::arg("staging"),
+        "Start baking the probes `indices` (of `positions`, the local frame, as "
+        "cloud_bake_manifest gives them) into the staging folder, each written atomically. The "
+        "Job's result is one dict per probe: index, record (its manifest entry, JSON text), "
+        "bytes_on_disk.");
+
+    m.def(
+        "finish_probe_set_staging",
+        [](const std::string& folder, const std::string& manifest_json, const py::list& staged) {
+            nlohmann::json j = parse_json(manifest_json, folder + " (manifest)");
+            std::vector<StagedProbe> probes;
+            std::vector<nlohmann::json> records;
+            for (const py::handle& item : staged) {
+                const auto d = item.cast<py::dict>();
+                StagedProbe probe;
+                probe.index = d["index"].cast<std::size_t>();
+                probe.bytes_on_disk = d["bytes_on_disk"].cast<std::size_t>();
+                probes.push_back(probe);
+                records.push_back(
+                    parse_json(d["record"].cast<std::string>(), folder + " (a probe's record)"));
+            }
+            std::vector<std::size_t> order(probes.size());
+            for (std::size_t k = 0; k < order.size(); ++k) {
+                order[k] = k;
+            }
+            std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+                return probes[a].index < probes[b].index;
+            });
+            nlohmann::json list = nlohmann::json::array();
+            std::vector<StagedProbe> sorted;
+            for (std::size_t k = 0; k < order.size(); ++k) {
+                if (probes[order[k]].index != k) {
+                    throw InputError(folder + ": probe " + std::to_string(k) +
+                                     " was not baked (or twice); the set is not complete");
+                }
+                list.push_back(records[order[k]]);
+                sorted.push_back(probes[order[k]]);
+            }
+            j["probes"] = std::move(list);
+            const ProbeSetManifest manifest = ProbeSetManifest::from_json(j, folder);
+            for (std::size_t k = 0; k < sorted.size(); ++k) {
+                sorted[k].record = manifest.probes[k];
+            }
+            {
+                py::gil_scoped_release release;
+                finish_probe_set_staging(folder, manifest);
+            }
+            BakeSummary summary;
+            summary.folder = folder;
+            add_staged_figures(summary, sorted);
+            return bake_summary_dict(summary, false);
+        },
+        py::arg("folder"), py::arg("manifest"), py::arg("staged"),
+        "Finishes a bake in parts: `manifest` as cloud_bake_manifest gave it, `staged` the dicts "
+        "start_bake_staged_probes returned, one per probe in any order. Checks that every probe "
+        "is in the staging folder, writes the manifest last and swaps the set in where `folder` "
+        "was. Returns the summary's probe count, coverage and byte figures.");
+}
+
+} // namespace lfprobe::python

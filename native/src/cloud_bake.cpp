@@ -1,0 +1,107 @@
+#include "lfprobe/cloud_bake.hpp"
+
+#include <chrono>
+
+#include "lfprobe/error.hpp"
+
+namespace lfprobe {
+
+using nlohmann::json;
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+} // namespace
+
+CloudBakeSource prepare_cloud_bake(std::shared_ptr<const PointCloud> cloud,
+                                   const BakeSettings& settings,
+                                   const LocalGeometryOptions& geometry_options,
+                                   Progress* progress) {
+    if (!cloud || cloud->size() == 0) {
+        throw InputError("bake: the point cloud is empty");
+    }
+    CloudBakeSource source;
+    source.cloud = std::move(cloud);
+    source.settings = settings;
+    source.geometry_options = geometry_options;
+    const auto start = std::chrono::steady_clock::now();
+    source.geometry = estimate_local_geometry(*source.cloud, geometry_options, progress);
+    source.normals_seconds = seconds_since(start);
+    const auto hierarchy_start = std::chrono::steady_clock::now();
+    source.hierarchy = hierarchy_for_bakes(*source.cloud, source.geometry, settings, progress);
+    source.hierarchy_seconds = seconds_since(hierarchy_start);
+    return source;
+}
+
+ProbeSetManifest cloud_bake_manifest(const PointCloud& cloud, const ProbePlacement& placement,
+                                     const BakeSettings& settings,
+                                     const LocalGeometryOptions& geometry_options,
+                                     const json& sources) {
+    ProbeSetManifest manifest;
+    manifest.world_offset = cloud.world_offset;
+    manifest.placement = placement;
+    manifest.bake = splat_settings_json(settings);
+    manifest.bake.update(json{{"source", "point cloud"},
+                              {"resolution", settings.resolution},
+                              {"normal_neighbours", geometry_options.normal_neighbours},
+                              {"spacing_neighbours", geometry_options.spacing_neighbours},
+                              {"points", cloud.size()}});
+    manifest.sources = sources;
+    return manifest;
+}
+
+std::vector<StagedProbe> bake_staged_probes(const CloudBakeSource& source,
+                                            const ProbePlacement& placement,
+                                            const std::vector<std::size_t>& indices,
+                                            const std::string& staging, Progress* progress) {
+    for (const std::size_t i : indices) {
+        if (i >= placement.positions.size()) {
+            throw InputError("bake: probe " + std::to_string(i) + " does not exist (the set has " +
+                             std::to_string(placement.positions.size()) + ")");
+        }
+    }
+    std::vector<StagedProbe> staged;
+    for (std::size_t n = 0; n < indices.size(); ++n) {
+        if (progress != nullptr) {
+            progress->throw_if_cancelled();
+        }
+        const std::size_t i = indices[n];
+        const ProbeMap map =
+            bake_probe_from_hierarchy(*source.cloud, source.geometry, source.hierarchy,
+                                      placement.positions[i], source.settings, progress);
+        staged.push_back(write_staged_probe(staging, i, map));
+    }
+    return staged;
+}
+
+BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,
+                                      const BakeSettings& settings,
+                                      const LocalGeometryOptions& geometry_options,
+                                      const std::string& folder, const json& sources,
+                                      Progress* progress) {
+    if (placement.positions.empty()) {
+        throw InputError("bake: no probe positions given");
+    }
+    if (cloud.size() == 0) {
+        throw InputError("bake: the point cloud is empty");
+    }
+    // The caller keeps the cloud alive for the call: a pointer that owns nothing.
+    const std::shared_ptr<const PointCloud> borrowed(std::shared_ptr<const PointCloud>{}, &cloud);
+    const CloudBakeSource source =
+        prepare_cloud_bake(borrowed, settings, geometry_options, progress);
+    BakeSummary summary = write_probe_set(
+        folder, cloud_bake_manifest(cloud, placement, settings, geometry_options, sources),
+        [&](std::size_t i) {
+            return bake_probe_from_hierarchy(cloud, source.geometry, source.hierarchy,
+                                             placement.positions[i], settings, progress);
+        },
+        progress);
+    summary.normals_seconds = source.normals_seconds;
+    summary.hierarchy_seconds = source.hierarchy_seconds;
+    return summary;
+}
+
+} // namespace lfprobe
