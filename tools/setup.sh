@@ -9,7 +9,8 @@ packages=(
   cmake ninja-build g++ python3-dev python3-numpy python3-pytest
   pybind11-dev libembree-dev libopenexr-dev libglm-dev libtbb-dev
   nlohmann-json3-dev libfast-float-dev libgtest-dev libstb-dev libxxhash-dev
-  python3-skimage python3-pip python3-matplotlib python3-open3d blender xvfb xauth clang-format
+  python3-skimage python3-pip python3-matplotlib python3-open3d python3-distributed blender xvfb
+  xauth clang-format
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -417,6 +417,16 @@ PYBIND11_MODULE(_native, m) {
              "Run to the end, calling callback(fraction, stage) every 0.1 s; returning False "
              "from it cancels.");
 
+    m.def(
+        "scan_cache_entry_path",
+        [](const std::string& path, const std::string& columns, const std::string& cache_dir) {
+            ScanReadOptions options;
+            options.columns = columns;
+            return scan_cache_entry_path(path, options, cache_dir);
+        },
+        py::arg("path"), py::arg("columns") = "", py::arg("cache_dir") = "",
+        "The parse cache's entry for a scan file in cache_dir (it may not exist yet); empty "
+        "where the cache does not apply.");
     m.def("start_load_scans", &start_load, py::arg("paths"),
           py::arg("scanners") = std::vector<std::vector<double>>{},
           py::arg("world_offset") = py::none(), py::arg("columns") = "", py::arg("cache_dir") = "",

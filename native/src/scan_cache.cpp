@@ -309,6 +309,12 @@ void write_entry(const fs::path& entry, const CacheKey& key, const ScanFile& sca
 
 } // namespace
 
+std::string scan_cache_entry_path(const std::string& path, const ScanReadOptions& options,
+                                  const std::string& cache_dir) {
+    const std::optional<CacheKey> key = cache_dir.empty() ? std::nullopt : key_of(path, options);
+    return key ? entry_path(cache_dir, *key).string() : std::string();
+}
+
 ScanFile read_scan_file_cached(const std::string& path, const ScanReadOptions& options,
                                const std::string& cache_dir, Progress* progress, bool* hit) {
     if (hit != nullptr) {

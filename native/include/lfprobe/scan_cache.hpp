@@ -18,6 +18,12 @@ namespace lfprobe {
                                              const std::string& cache_dir,
                                              Progress* progress = nullptr, bool* hit = nullptr);
 
+// The cache entry that `path` is read from (or written to) in `cache_dir`; empty where the
+// cache does not apply (no cache_dir, or a file that cannot be stamped).
+[[nodiscard]] std::string scan_cache_entry_path(const std::string& path,
+                                                const ScanReadOptions& options,
+                                                const std::string& cache_dir);
+
 // The scan loading every caller runs: reads each of `paths` (through the cache in `cache_dir`;
 // empty: no cache) and merges them into one cloud. InputError when `paths` is empty.
 [[nodiscard]] PointCloud load_scans(const std::vector<std::string>& paths,

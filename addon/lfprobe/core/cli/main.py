@@ -15,6 +15,7 @@ from typing import Optional, Sequence
 
 from .. import defaults, native
 from . import compare as compare_cli, mesh as mesh_cli, place as place_cli, report as report_cli, storage as storage_cli
+from ..cluster_bake import bake_scans_on_cluster
 from ..pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh, bake_from_scans
 from ..probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
 from ..probe_storage import describe as describe_storage
@@ -50,11 +51,30 @@ def _cmd_bake(args) -> int:
     options.distance_step = args.distance_step
     progress = None if args.quiet else TerminalProgress()
     if args.mesh:
+        if args.scheduler or args.workers is not None:
+            raise ValueError("--scheduler and --workers bake from scans (--scan); bake a mesh locally")
         if args.supersample is not None:
             options.extra["supersample"] = args.supersample
         summary = bake_from_mesh(args.mesh, args.out, placement, options, progress)
         summary.setdefault("points", 0)
         return _print_bake_summary(args, summary, f"{args.mesh[0]}")
+    if args.scheduler or args.workers is not None:
+        if args.scheduler and args.workers is not None:
+            raise ValueError("give --scheduler (a running cluster) or --workers (a local one), not both")
+        summary = bake_scans_on_cluster(
+            args.scan,
+            args.out,
+            placement,
+            options,
+            scanners=triples(args.scanner, "--scanner"),
+            columns=args.columns or "",
+            cache_dir="" if args.no_cache else args.cache,
+            scheduler=args.scheduler,
+            workers=args.workers,
+            probes_per_task=args.probes_per_task,
+            progress=progress,
+        )
+        return _print_bake_summary(args, summary, f"{summary['points']:,} points")
     summary = bake_from_scans(
         args.scan,
         args.out,
@@ -85,6 +105,12 @@ def _print_bake_summary(args, summary: dict, source: str) -> int:
     if "write_seconds" in summary:
         timing.append(f"write {summary['write_seconds']:.2f} s")
     print("  " + ", ".join(timing))
+    if "cluster" in summary:
+        c = summary["cluster"]
+        print(f"  cluster: {c['workers']} worker(s), {c['tasks']} task(s) in {c['tasks_seconds']:.2f} s, "
+              f"{c['probes_per_second']:.2f} probes/s; each worker read {_mib(c['bytes_read_per_worker'])} "
+              f"and prepared the cloud in {c['prepare_seconds_per_worker']:.2f} s; "
+              f"scheduler overhead {1000 * c['overhead_seconds_per_task']:.1f} ms/task")
     print(
         f"  coverage: surface {100 * cov['surface']:.2f}%, inferred {100 * cov['inferred']:.2f}%, "
         f"unknown {100 * cov['unknown']:.2f}%, empty {100 * cov['empty']:.2f}%"
@@ -258,6 +284,15 @@ def build_parser() -> argparse.ArgumentParser:
                       help="scans: where the point hierarchy's cell surfels are at most T texels apart "
                            "as the probe sees them they stand in for the points, so a probe's cost "
                            "follows its texels, not the cloud (default %(default)s; 0: splat every point)")
+    cluster = bake.add_argument_group(
+        "cluster", "bake the probes on a Dask cluster; the scans, the parse cache and --out must be "
+                   "at the same paths on every worker (shared storage)")
+    cluster.add_argument("--scheduler", metavar="ADDRESS", default=None,
+                         help="a running Dask scheduler (e.g. tcp://host:8786, from `dask scheduler`)")
+    cluster.add_argument("--workers", type=int, default=None, metavar="N",
+                         help="a local Dask cluster of N worker processes")
+    cluster.add_argument("--probes-per-task", type=int, default=1, metavar="K",
+                         help="probes baked by one cluster task (default 1)")
     bake.add_argument("--json", action="store_true", help="print the summary as JSON")
     bake.add_argument("--quiet", action="store_true", help="no progress output")
     bake.add_argument("--auto", action="store_true",

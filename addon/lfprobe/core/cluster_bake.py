@@ -1,0 +1,300 @@
+"""Baking a probe set's probes on a Dask cluster (a running scheduler, or a local cluster of
+worker processes) instead of in this process.
+
+The client (this process) reads the scans once, which fills the parse cache, opens the set's
+staging folder and hands the probes out as tasks of `probes_per_task` probes each. A worker
+reads the same scans through the same cache (shared storage: the scan files, the cache folder
+and the output folder must be at the same paths on every worker), makes the cloud ready to bake
+once (normals, spacing, point hierarchy; kept for the worker's later tasks) and writes each of
+its probes atomically into the staging folder. The client writes the manifest last, only when
+every probe is there, and swaps the set in: the result is the set a local bake writes, byte for
+byte. A worker that dies mid-task leaves at most a temporary file, which the finish removes;
+Dask runs its task again on another worker. Cancelling (Ctrl-C, the progress callback, Esc in
+Blender) removes the staging folder, which also stops the tasks still running: a worker checks
+for it between probes and the native bake refuses to write into a folder that is gone.
+
+Workers run one task at a time (`--nthreads 1`): a task's bake already uses every core of its
+machine (TBB).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+import threading
+import time
+from dataclasses import dataclass
+from typing import Callable, Optional, Sequence
+
+from . import native
+from .errors import InputError
+from .pipeline import BakeOptions, ProbePlacementSpec, apply_storage, load_scans, load_scans_and_sources
+from .scan_merge import describe_records
+from .sources import default_cache_dir
+
+Progress = Optional[Callable[[float, str], object]]
+
+# How long the client waits for a scheduler to answer before it says it cannot be reached.
+CONNECT_TIMEOUT_SECONDS = 10.0
+# How often the client looks at the tasks and calls the progress callback.
+POLL_SECONDS = 0.1
+# How long a cancelled bake waits for the tasks still running to notice and stop writing.
+CANCEL_GRACE_SECONDS = 5.0
+
+
+class SchedulerUnreachableError(InputError):
+    """The Dask scheduler given cannot be reached (or Dask is not installed)."""
+
+
+@dataclass(frozen=True)
+class CloudSpec:
+    """What a worker needs to load exactly the cloud the client loaded, and bake from it."""
+
+    paths: tuple
+    scanners: tuple
+    columns: str
+    cache_dir: str
+    world_offset: tuple
+    settings: tuple  # (name, value) pairs of the native bake settings
+
+
+# Per worker process: the cloud its last tasks baked from, ready to bake (one at a time, so a
+# worker that serves several bakes holds one cloud).
+_prepared: dict = {}
+_prepared_lock = threading.Lock()
+
+
+def _prepared_source(spec: CloudSpec):
+    with _prepared_lock:
+        source = _prepared.get(spec)
+        if source is None:
+            _prepared.clear()
+            cloud = load_scans(list(spec.paths), [list(s) if s is not None else None for s in spec.scanners],
+                               spec.columns, spec.cache_dir, world_offset=list(spec.world_offset))
+            source = native.load().start_prepare_cloud_bake(cloud, dict(spec.settings)).run(None)
+            _prepared[spec] = source
+        return source
+
+
+def bake_probe_batch(spec: CloudSpec, positions: list, indices: list, staging: str) -> dict:
+    """A cluster task: bakes the probes `indices` into `staging`. Returns the staged records
+    (finish_probe_set_staging's input) and this worker's figures."""
+    started = time.perf_counter()
+    fresh = spec not in _prepared
+    source = _prepared_source(spec)
+    prepared = time.perf_counter()
+    job = native.load().start_bake_staged_probes(source, positions, list(indices), staging)
+    # The staging folder's removal is the client's cancel: stop between texel batches too.
+    staged = job.run(lambda _fraction, _stage: os.path.isdir(staging))
+    return {
+        "staged": staged,
+        "worker_pid": os.getpid(),
+        "prepare_seconds": (prepared - started) if fresh else 0.0,
+        "normals_seconds": source.normals_seconds if fresh else 0.0,
+        "hierarchy_seconds": source.hierarchy_seconds if fresh else 0.0,
+        "bake_seconds": time.perf_counter() - prepared,
+        "bytes_read": _bytes_read(spec) if fresh else 0,
+    }
+
+
+def _bytes_read(spec: CloudSpec) -> int:
+    """What a worker reads to get the cloud: each scan's parse-cache entry where the cache holds
+    one, else the scan file itself (E57 and LAS/LAZ are read through their libraries, uncached)."""
+    total = 0
+    for path in spec.paths:
+        entry = native.load().scan_cache_entry_path(path, spec.columns, spec.cache_dir) if spec.cache_dir else ""
+        total += os.path.getsize(entry if entry and os.path.isfile(entry) else path)
+    return total
+
+
+class _Cluster:
+    """A Dask client on a running scheduler, or on a local cluster of worker processes that it
+    owns and closes."""
+
+    def __init__(self, scheduler: Optional[str], workers: Optional[int]):
+        try:
+            from distributed import Client, LocalCluster
+        except ImportError as error:
+            raise SchedulerUnreachableError(
+                "baking on a cluster needs Dask's distributed package (Debian: apt-get install "
+                f"python3-distributed; PyPI: pip install distributed): {error}") from None
+        self.local = None
+        if scheduler:
+            try:
+                self.client = Client(scheduler, timeout=CONNECT_TIMEOUT_SECONDS, set_as_default=False)
+            except (OSError, TimeoutError, ValueError) as error:
+                raise SchedulerUnreachableError(
+                    f"cannot reach the Dask scheduler at {scheduler!r} ({error}); start one with "
+                    "`dask scheduler` and give its address (tcp://HOST:8786)") from None
+        else:
+            count = int(workers or 0)
+            if count < 1:
+                raise InputError("--workers needs a whole number of at least 1")
+            # One thread per worker: each task's bake uses every core itself.
+            self.local = LocalCluster(n_workers=count, threads_per_worker=1, processes=True,
+                                      dashboard_address=None, silence_logs=logging.ERROR)
+            self.client = Client(self.local, set_as_default=False)
+
+    def worker_count(self) -> int:
+        return len(self.client.scheduler_info().get("workers", {}))
+
+    def close(self) -> None:
+        self.client.close()
+        if self.local is not None:
+            self.local.close()
+
+
+def bake_scans_on_cluster(
+    scan_paths: Sequence[str],
+    out_dir: str,
+    placement: ProbePlacementSpec,
+    options: BakeOptions,
+    scanners: Sequence = (),
+    columns: str = "",
+    cache_dir: Optional[str] = None,
+    world_offset: Optional[Sequence[float]] = None,
+    scheduler: Optional[str] = None,
+    workers: Optional[int] = None,
+    probes_per_task: int = 1,
+    progress: Progress = None,
+) -> dict:
+    """Scan files → probe set folder, the probes baked on a Dask cluster: `scheduler` (an address
+    such as tcp://host:8786) or a local cluster of `workers` processes. Returns the bake summary
+    (as bake_from_scans) with a "cluster" section: workers, tasks, seconds per probe, what the
+    workers read and the scheduler's overhead."""
+    if options.plan is not None:
+        raise InputError("a cluster bake bakes every probe at one resolution: plan first "
+                         "(./lfprobe place) and bake the planned positions, or bake --auto locally")
+    if probes_per_task < 1:
+        raise InputError("--probes-per-task needs a whole number of at least 1")
+    placement.validate()
+    _native = native.load()
+    started = time.perf_counter()
+    cluster = _Cluster(scheduler, workers)
+    try:
+        cache = default_cache_dir() if cache_dir is None else cache_dir
+        cloud, records = load_scans_and_sources(scan_paths, scanners, columns, cache,
+                                                world_offset=world_offset, progress=progress)
+        sources = describe_records(records)
+        settings = {"resolution": int(options.resolution), "splat_scale": float(options.splat_scale),
+                    "hole_fill_texels": int(options.hole_fill_texels),
+                    "normal_neighbours": int(options.normal_neighbours),
+                    "lod_texels": float(options.lod_texels)}
+        plan = _native.cloud_bake_manifest(cloud, **placement.native_kwargs(),
+                                           sources_json=json.dumps(list(sources)), settings=settings)
+        spec = CloudSpec(
+            paths=tuple(os.path.abspath(str(p)) for p in scan_paths),
+            scanners=tuple(tuple(map(float, s)) if s is not None else None for s in scanners),
+            columns=columns or "",
+            cache_dir=os.path.abspath(cache) if cache else "",
+            world_offset=tuple(float(v) for v in cloud.world_offset),
+            settings=tuple(sorted(settings.items())),
+        )
+        points = len(cloud)
+        del cloud  # the workers load their own; the client keeps no cloud during the bake
+        load_seconds = time.perf_counter() - started
+        summary = _run_tasks(cluster, out_dir, spec, plan, probes_per_task, progress)
+    finally:
+        cluster.close()
+    summary["points"] = points
+    summary["world_offset"] = list(spec.world_offset)
+    summary["cluster"]["client_load_seconds"] = load_seconds
+    summary["cluster"]["wall_seconds"] = time.perf_counter() - started
+    apply_storage(out_dir, summary, options)
+    return summary
+
+
+def _run_tasks(cluster: _Cluster, out_dir: str, spec: CloudSpec, plan: dict, probes_per_task: int,
+               progress: Progress) -> dict:
+    _native = native.load()
+    positions = [list(p) for p in plan["positions"]]
+    total = len(positions)
+    batches = [list(range(i, min(i + probes_per_task, total))) for i in range(0, total, probes_per_task)]
+    staging = _native.open_probe_set_staging(out_dir)
+    futures = []
+    try:
+        started = time.perf_counter()
+        futures = [cluster.client.submit(bake_probe_batch, spec, positions, batch, staging, pure=False)
+                   for batch in batches]
+        staged, results, done = [], [], 0
+        pending = list(futures)
+        while pending:
+            # Polled, not waited on: the progress callback is how Blender's Esc and the
+            # terminal's Ctrl-C reach a bake, so it must run while tasks are under way.
+            finished = [f for f in pending if f.done()]
+            for future in finished:
+                pending.remove(future)
+                result = future.result()  # a task's error, or KilledWorker, raises here
+                results.append(result)
+                staged.extend(result["staged"])
+                done += len(result["staged"])
+            _report(progress, done, total)
+            if not finished:
+                time.sleep(POLL_SECONDS)
+        tasks_seconds = time.perf_counter() - started
+        summary = _native.finish_probe_set_staging(out_dir, plan["manifest"], staged)
+    except BaseException:
+        _call_off(cluster, futures, out_dir)
+        raise
+    summary["folder"] = out_dir
+    summary.pop("write_seconds", None)  # the workers' bake_seconds hold their writes
+    summary.update(_figures(results, total, len(batches), tasks_seconds, cluster))
+    return summary
+
+
+def _report(progress: Progress, done: int, total: int) -> None:
+    if progress is None:
+        return
+    if progress(done / total, f"baking on the cluster: {done} of {total} probes") is False:
+        raise native.cancelled_type()("bake cancelled")
+
+
+def _call_off(cluster: _Cluster, futures: list, out_dir: str) -> None:
+    """Cancels the tasks and removes the staging folder; a task still running stops at its next
+    probe (or texel batch) and cannot write into the folder once it is gone, but a rename under
+    way may land, so the folder is removed again until the tasks are over."""
+    _native = native.load()
+    try:
+        cluster.client.cancel(futures, force=True)
+    except Exception:  # the cluster may be what failed; the folder goes all the same
+        pass
+    _native.discard_probe_set_staging(out_dir)
+    deadline = time.monotonic() + CANCEL_GRACE_SECONDS
+    while time.monotonic() < deadline:
+        try:
+            busy = any(cluster.client.processing().values())
+        except Exception:
+            busy = False
+        if not busy:
+            break
+        time.sleep(0.05)
+        _native.discard_probe_set_staging(out_dir)
+    _native.discard_probe_set_staging(out_dir)
+
+
+def _figures(results: list, probes: int, tasks: int, tasks_seconds: float, cluster: _Cluster) -> dict:
+    workers = {r["worker_pid"] for r in results}
+    bake = sum(r["bake_seconds"] for r in results)
+    prepare = [r["prepare_seconds"] for r in results if r["prepare_seconds"] > 0]
+    busy = bake + sum(prepare)
+    slots = max(1, cluster.worker_count())
+    # What the wall clock of the task phase held beyond the workers' own work, per task.
+    overhead = max(0.0, tasks_seconds * min(slots, len(workers) or 1) - busy) / max(1, tasks)
+    return {
+        "probe_count": probes,
+        "normals_seconds": max([r["normals_seconds"] for r in results] or [0.0]),
+        "hierarchy_seconds": max([r["hierarchy_seconds"] for r in results] or [0.0]),
+        "bake_seconds": bake,
+        "cluster": {
+            "workers": slots,
+            "workers_used": len(workers),
+            "tasks": tasks,
+            "tasks_seconds": tasks_seconds,
+            "probes_per_second": probes / tasks_seconds if tasks_seconds > 0 else 0.0,
+            "seconds_per_probe": bake / probes if probes else 0.0,
+            "prepare_seconds_per_worker": (sum(prepare) / len(prepare)) if prepare else 0.0,
+            "bytes_read_per_worker": max([r["bytes_read"] for r in results] or [0]),
+            "overhead_seconds_per_task": overhead,
+        },
+    }
