@@ -20,7 +20,7 @@ bl_info = {
 }
 
 # Registered in this order, unregistered in reverse (the layout contract of the add-on).
-_MODULE_NAMES = ("properties", "operators.scan_import", "operators.grid", "ui.overlay", "operators.bake",
+_MODULE_NAMES = ("preferences", "properties", "operators.scan_import", "operators.grid", "ui.overlay", "operators.bake",
                  "operators.place_views", "ui.panels", "engine", "operators.compare")
 _registered = []
 

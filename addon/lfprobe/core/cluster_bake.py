@@ -19,6 +19,7 @@ machine (TBB).
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import logging
 import os
@@ -27,10 +28,11 @@ import time
 from dataclasses import dataclass
 from typing import Callable, Optional, Sequence
 
-from . import native
+from . import cluster_task, native
 from .errors import InputError
-from .pipeline import BakeOptions, ProbePlacementSpec, apply_storage, load_scans, load_scans_and_sources
-from .scan_merge import describe_records
+from .cloud_transform import transform_scans
+from .pipeline import BakeOptions, ProbePlacementSpec, apply_storage, load_scans_and_sources
+from .scan_merge import describe_records, file_of_each_scan
 from .sources import default_cache_dir
 
 Progress = Optional[Callable[[float, str], object]]
@@ -57,6 +59,19 @@ class CloudSpec:
     cache_dir: str
     world_offset: tuple
     settings: tuple  # (name, value) pairs of the native bake settings
+    # One 4×4 transform per file (Blender's scan objects), or none: the files as they are.
+    file_matrices: tuple = ()
+
+
+def _load_cloud(spec: CloudSpec, world_offset, progress: Progress = None):
+    """The cloud to bake and its scans' records, as the client and every worker load it."""
+    cloud, records = load_scans_and_sources(
+        list(spec.paths), [list(s) if s is not None else None for s in spec.scanners], spec.columns,
+        spec.cache_dir, world_offset=world_offset, progress=progress)
+    if spec.file_matrices:
+        files = file_of_each_scan(records, list(spec.paths))
+        cloud = transform_scans(cloud, [spec.file_matrices[f] for f in files])
+    return cloud, records
 
 
 # Per worker process: the cloud its last tasks baked from, ready to bake (one at a time, so a
@@ -70,16 +85,17 @@ def _prepared_source(spec: CloudSpec):
         source = _prepared.get(spec)
         if source is None:
             _prepared.clear()
-            cloud = load_scans(list(spec.paths), [list(s) if s is not None else None for s in spec.scanners],
-                               spec.columns, spec.cache_dir, world_offset=list(spec.world_offset))
+            cloud, _records = _load_cloud(spec, list(spec.world_offset))
             source = native.load().start_prepare_cloud_bake(cloud, dict(spec.settings)).run(None)
             _prepared[spec] = source
         return source
 
 
-def bake_probe_batch(spec: CloudSpec, positions: list, indices: list, staging: str) -> dict:
-    """A cluster task: bakes the probes `indices` into `staging`. Returns the staged records
+def bake_probe_batch(spec_fields: dict, positions: list, indices: list, staging: str) -> dict:
+    """A cluster task (run through core/cluster_task.py): bakes the probes `indices` into
+    `staging`. spec_fields: a CloudSpec's fields. Returns the staged records
     (finish_probe_set_staging's input) and this worker's figures."""
+    spec = CloudSpec(**spec_fields)
     started = time.perf_counter()
     fresh = spec not in _prepared
     source = _prepared_source(spec)
@@ -119,6 +135,10 @@ class _Cluster:
             raise SchedulerUnreachableError(
                 "baking on a cluster needs Dask's distributed package (Debian: apt-get install "
                 f"python3-distributed; PyPI: pip install distributed): {error}") from None
+        # The task function travels by value: a worker may not know this process's package name.
+        import cloudpickle
+
+        cloudpickle.register_pickle_by_value(cluster_task)
         self.local = None
         if scheduler:
             try:
@@ -154,13 +174,15 @@ def bake_scans_on_cluster(
     columns: str = "",
     cache_dir: Optional[str] = None,
     world_offset: Optional[Sequence[float]] = None,
+    file_matrices: Sequence = (),
     scheduler: Optional[str] = None,
     workers: Optional[int] = None,
     probes_per_task: int = 1,
     progress: Progress = None,
 ) -> dict:
     """Scan files → probe set folder, the probes baked on a Dask cluster: `scheduler` (an address
-    such as tcp://host:8786) or a local cluster of `workers` processes. Returns the bake summary
+    such as tcp://host:8786) or a local cluster of `workers` processes. file_matrices: one 4×4
+    transform per file that moves its points (Blender's scan objects), or none. Returns the bake summary
     (as bake_from_scans) with a "cluster" section: workers, tasks, seconds per probe, what the
     workers read and the scheduler's overhead."""
     if options.plan is not None:
@@ -174,23 +196,24 @@ def bake_scans_on_cluster(
     cluster = _Cluster(scheduler, workers)
     try:
         cache = default_cache_dir() if cache_dir is None else cache_dir
-        cloud, records = load_scans_and_sources(scan_paths, scanners, columns, cache,
-                                                world_offset=world_offset, progress=progress)
-        sources = describe_records(records)
         settings = {"resolution": int(options.resolution), "splat_scale": float(options.splat_scale),
                     "hole_fill_texels": int(options.hole_fill_texels),
                     "normal_neighbours": int(options.normal_neighbours),
                     "lod_texels": float(options.lod_texels)}
-        plan = _native.cloud_bake_manifest(cloud, **placement.native_kwargs(),
-                                           sources_json=json.dumps(list(sources)), settings=settings)
         spec = CloudSpec(
             paths=tuple(os.path.abspath(str(p)) for p in scan_paths),
             scanners=tuple(tuple(map(float, s)) if s is not None else None for s in scanners),
             columns=columns or "",
             cache_dir=os.path.abspath(cache) if cache else "",
-            world_offset=tuple(float(v) for v in cloud.world_offset),
+            world_offset=(),
             settings=tuple(sorted(settings.items())),
+            file_matrices=tuple(tuple(tuple(float(v) for v in row) for row in m) for m in file_matrices),
         )
+        cloud, records = _load_cloud(spec, None if world_offset is None else list(world_offset), progress)
+        spec = dataclasses.replace(spec, world_offset=tuple(float(v) for v in cloud.world_offset))
+        plan = _native.cloud_bake_manifest(cloud, **placement.native_kwargs(),
+                                           sources_json=json.dumps(list(describe_records(records))),
+                                           settings=settings)
         points = len(cloud)
         del cloud  # the workers load their own; the client keeps no cloud during the bake
         load_seconds = time.perf_counter() - started
@@ -215,8 +238,9 @@ def _run_tasks(cluster: _Cluster, out_dir: str, spec: CloudSpec, plan: dict, pro
     futures = []
     try:
         started = time.perf_counter()
-        futures = [cluster.client.submit(bake_probe_batch, spec, positions, batch, staging, pure=False)
-                   for batch in batches]
+        fields = dataclasses.asdict(spec)
+        futures = [cluster.client.submit(cluster_task.run_bake_task, fields, positions, batch, staging,
+                                         pure=False) for batch in batches]
         staged, results, done = [], [], 0
         pending = list(futures)
         while pending:

@@ -39,6 +39,9 @@ def build_parser() -> argparse.ArgumentParser:
     bake = sub.add_parser("bake", help="bake the scene's probe grids and save the .blend")
     bake.add_argument("--grid", default="", metavar="NAME", help="bake only this grid (default: every grid)")
     bake.add_argument("--no-save", action="store_true", help="do not save the .blend afterwards")
+    bake.add_argument("--scheduler", default="", metavar="ADDRESS",
+                      help="bake the probes on this running Dask scheduler (tcp://HOST:8786; default: "
+                           "the add-on preferences' address, else this machine)")
     _add_storage_arguments(bake)
     bake.set_defaults(run=commands.run_bake)
 

@@ -93,7 +93,7 @@ def run_bake(args) -> int:
     for grid_obj in grids:
         store_storage_options(grid_obj.lfprobe_grid, args)
         try:
-            result = bpy.ops.object.lfprobe_bake(grid=grid_obj.name)
+            result = bpy.ops.object.lfprobe_bake(grid=grid_obj.name, scheduler=args.scheduler)
         except RuntimeError as error:  # the operator's ERROR report
             raise BatchError(str(error).strip(), EXIT_BAD_INPUT) from error
         if result != {"FINISHED"}:

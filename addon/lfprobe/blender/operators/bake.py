@@ -13,7 +13,7 @@ import shutil
 import bpy
 from bpy.props import StringProperty
 
-from ...core import native, pipeline
+from ...core import cluster_bake, native, pipeline
 from ...core.atomic_write import replace_folder
 from ...core.cloud_transform import to_world, transform_scans
 from ...core.errors import InputError
@@ -23,6 +23,7 @@ from ...core.scan_formats import is_library_format
 from ...core.scan_merge import describe_records, file_of_each_scan, loaded_with_records
 from ...core.sources import default_cache_dir
 from .. import grid as grid_module
+from .. import preferences
 from .. import scan_object
 from . import job_modal
 from .job_modal import NativeJobOperator, ThreadJob
@@ -156,6 +157,18 @@ class GridBake:
             self.paths, scanners=given, world_offset=list(self.offset), cache_dir=default_cache_dir()
         )
 
+    def start_cluster_bake(self, out_dir: str, scheduler: str):
+        """The job that bakes the grid's probes on the Dask scheduler at `scheduler` into
+        `out_dir`: the workers read the scans' files through the parse cache and move each by
+        its scan object's transform, as cloud_and_sources does here."""
+        paths, scanners, offset = list(self.paths), list(self.scanners), list(self.offset)
+        if len(scanners) != len(paths) or any(s is None for s in scanners):
+            scanners = []
+        matrices, placement, options = list(self.file_matrices), self.placement, self.options
+        return ThreadJob(lambda report: cluster_bake.bake_scans_on_cluster(
+            paths, out_dir, placement, options, scanners=scanners, cache_dir=default_cache_dir(),
+            world_offset=offset, file_matrices=matrices, scheduler=scheduler, progress=report))
+
     def cloud_and_sources(self, loaded):
         """(the cloud to bake, moved by the scan objects' transforms; the manifest's sources)."""
         loaded, records = loaded_with_records(loaded, self.paths)
@@ -211,6 +224,12 @@ class LFPROBE_OT_bake(GridJobOperator, bpy.types.Operator):
     job_label = GRID_JOB_LABELS[0]
 
     grid: StringProperty(name="Grid", description="Name of the grid object (empty: the active object)", default="")
+    scheduler: StringProperty(
+        name="Scheduler",
+        description="Dask scheduler to bake the probes on (empty: the add-on preferences' address, "
+        "and with none there, this machine)",
+        default="",
+    )
 
     def start_job(self, context):
         self._staging = None
@@ -229,6 +248,14 @@ class LFPROBE_OT_bake(GridJobOperator, bpy.types.Operator):
                                        "turn it off for mesh sources")
                 return None
             return self._start_mesh_bake(context, inputs.meshes)
+        scheduler = self.scheduler.strip() or preferences.scheduler_address(context)
+        if scheduler:
+            if inputs.options.plan is not None:
+                self.report({"ERROR"}, "Probe bake: Plan From Data bakes on this machine; turn it off "
+                                       "to bake on the Dask scheduler, or clear the scheduler address")
+                return None
+            self._step = "bake"
+            return inputs.start_cluster_bake(self._staging, scheduler)
         self._step = "load"
         return inputs.start_load()
 
