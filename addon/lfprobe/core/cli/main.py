@@ -249,11 +249,15 @@ def _cmd_camera(args) -> int:
 
 def _cmd_bench(args) -> int:
     if args.res is None:
-        args.res = 1024 if args.suite == "render" else 2048
+        args.res = {"render": 1024, "cluster": 512}.get(args.suite, 2048)
     if args.suite == "render":
         from .. import bench_render
 
         return bench_render.main(args)
+    if args.suite == "cluster":
+        from .. import bench_cluster
+
+        return bench_cluster.main(args)
     from .. import bench
 
     return bench.main(args)
@@ -360,7 +364,7 @@ def build_parser() -> argparse.ArgumentParser:
     place_cli.add_parsers(sub)
 
     bench = sub.add_parser("bench", help="benchmarks that print measured figures")
-    bench.add_argument("suite", choices=["core", "render"],
+    bench.add_argument("suite", choices=["core", "render", "cluster"],
                        help="core: scan parsing and probe baking; render: probe tracing vs splatting")
     bench.add_argument("--points", type=int, default=10_000_000, help="points in the bake benchmark")
     bench.add_argument("--res", type=int, default=None,
@@ -374,6 +378,12 @@ def build_parser() -> argparse.ArgumentParser:
                             "(comma-separated; empty: skip)")
     bench.add_argument("--hierarchy-lods", default="0,1,2",
                        help="core: lod_texels values to bake with, 0 (every point) first")
+    bench.add_argument("--cluster-points", type=int, default=2_000_000,
+                       help="cluster: points of the generated room")
+    bench.add_argument("--cluster-workers", type=int, default=2,
+                       help="cluster: worker processes of the local Dask cluster")
+    bench.add_argument("--cluster-cores", type=int, default=32,
+                       help="cluster: cores per worker machine in the on-paper scaling")
     bench.add_argument("--json", metavar="FILE", help="also write the figures as JSON")
     bench.set_defaults(run=_cmd_bench)
     return parser
