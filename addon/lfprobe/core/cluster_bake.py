@@ -29,7 +29,7 @@ from dataclasses import dataclass
 from typing import Callable, Optional, Sequence
 
 from . import cluster_task, native
-from .errors import InputError
+from .errors import InputError, LfprobeError
 from .cloud_transform import transform_scans
 from .pipeline import BakeOptions, ProbePlacementSpec, apply_storage, load_scans_and_sources
 from .scan_merge import describe_records, file_of_each_scan
@@ -47,6 +47,10 @@ CANCEL_GRACE_SECONDS = 5.0
 
 class SchedulerUnreachableError(InputError):
     """The Dask scheduler given cannot be reached (or Dask is not installed)."""
+
+
+class ClusterError(LfprobeError, OSError):
+    """The cluster failed a bake (workers that cannot import lfprobe, or that kept dying)."""
 
 
 @dataclass(frozen=True)
@@ -249,7 +253,7 @@ def _run_tasks(cluster: _Cluster, out_dir: str, spec: CloudSpec, plan: dict, pro
             finished = [f for f in pending if f.done()]
             for future in finished:
                 pending.remove(future)
-                result = future.result()  # a task's error, or KilledWorker, raises here
+                result = _task_result(future)
                 results.append(result)
                 staged.extend(result["staged"])
                 done += len(result["staged"])
@@ -265,6 +269,19 @@ def _run_tasks(cluster: _Cluster, out_dir: str, spec: CloudSpec, plan: dict, pro
     summary.pop("write_seconds", None)  # the workers' bake_seconds hold their writes
     summary.update(_figures(results, total, len(batches), tasks_seconds, cluster))
     return summary
+
+
+def _task_result(future):
+    """A finished task's result; its error as lfprobe's where the cluster, not the input, failed."""
+    try:
+        return future.result()
+    except ImportError as error:  # the worker was started without lfprobe on its path
+        raise ClusterError(str(error)) from None
+    except Exception as error:
+        if type(error).__name__ == "KilledWorker":  # Dask gave up after workers died running it
+            raise ClusterError(f"the cluster lost the workers running a bake task ({error}); the set "
+                               "was not written") from None
+        raise
 
 
 def _report(progress: Progress, done: int, total: int) -> None:
