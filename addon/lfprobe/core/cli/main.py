@@ -58,33 +58,15 @@ def _cmd_bake(args) -> int:
         summary = bake_from_mesh(args.mesh, args.out, placement, options, progress)
         summary.setdefault("points", 0)
         return _print_bake_summary(args, summary, f"{args.mesh[0]}")
+    scans = dict(scanners=triples(args.scanner, "--scanner"), columns=args.columns or "",
+                 cache_dir="" if args.no_cache else args.cache, progress=progress)
     if args.scheduler or args.workers is not None:
         if args.scheduler and args.workers is not None:
             raise ValueError("give --scheduler (a running cluster) or --workers (a local one), not both")
-        summary = bake_scans_on_cluster(
-            args.scan,
-            args.out,
-            placement,
-            options,
-            scanners=triples(args.scanner, "--scanner"),
-            columns=args.columns or "",
-            cache_dir="" if args.no_cache else args.cache,
-            scheduler=args.scheduler,
-            workers=args.workers,
-            probes_per_task=args.probes_per_task,
-            progress=progress,
-        )
-        return _print_bake_summary(args, summary, f"{summary['points']:,} points")
-    summary = bake_from_scans(
-        args.scan,
-        args.out,
-        placement,
-        options,
-        scanners=triples(args.scanner, "--scanner"),
-        columns=args.columns or "",
-        cache_dir="" if args.no_cache else args.cache,
-        progress=progress,
-    )
+        summary = bake_scans_on_cluster(args.scan, args.out, placement, options, scheduler=args.scheduler,
+                                        workers=args.workers, probes_per_task=args.probes_per_task, **scans)
+    else:
+        summary = bake_from_scans(args.scan, args.out, placement, options, **scans)
     return _print_bake_summary(args, summary, f"{summary['points']:,} points")
 
 
