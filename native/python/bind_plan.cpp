@@ -68,6 +68,8 @@ PlanSettings plan_settings_from(const py::dict& options) {
             s.bake.hole_fill_texels = v.cast<int>();
         } else if (key == "lod_texels") {
             s.bake.lod_texels = v.cast<float>();
+        } else if (key == "splat_edge_margin") {
+            s.bake.splat_edge_margin = v.cast<float>();
         } else {
             throw InputError(
                 "plan: unknown option '" + key +

@@ -44,6 +44,8 @@ CloudBakeOptions cloud_bake_options_from(const py::dict& options) {
             o.settings.max_splat_radius_texels = v.cast<int>();
         } else if (key == "lod_texels") {
             o.settings.lod_texels = v.cast<float>();
+        } else if (key == "splat_edge_margin") {
+            o.settings.splat_edge_margin = v.cast<float>();
         } else if (key == "normal_neighbours") {
             o.geometry.normal_neighbours = v.cast<int>();
         } else {

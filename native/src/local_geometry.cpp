@@ -252,6 +252,25 @@ private:
     int block_shift_ = -1;
 };
 
+// A point's SurfaceEdge from `to_mean`, the offset of its neighbours' mean: the part of it in
+// the tangent plane of `normal` (all of it without a normal), in spacings.
+SurfaceEdge surface_edge(const glm::dvec3& to_mean, const glm::vec3& normal, float spacing) {
+    SurfaceEdge edge;
+    const glm::dvec3 n(normal);
+    const glm::dvec3 tangential =
+        glm::dot(n, n) > 0.0 ? to_mean - glm::dot(to_mean, n) * n : to_mean;
+    const double length = glm::length(tangential);
+    if (!(spacing > 0.0f) || !(length > 0.0)) {
+        return edge;
+    }
+    for (int a = 0; a < 3; ++a) {
+        edge.inward[a] = static_cast<std::int8_t>(std::lround(127.0 * tangential[a] / length));
+    }
+    edge.offset = static_cast<std::uint8_t>(
+        std::min(255.0, std::round(64.0 * length / static_cast<double>(spacing))));
+    return edge;
+}
+
 } // namespace
 
 std::vector<std::uint32_t> morton_order(const std::vector<glm::vec3>& positions) {
@@ -326,6 +345,7 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
     result.normals.assign(n, glm::vec3(0.0f));
     result.spacing.assign(n, 0.0f);
     result.oriented.assign(n, 0);
+    result.edges.assign(n, SurfaceEdge{});
     if (n == 0) {
         return result;
     }
@@ -389,16 +409,16 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
                         spacing_count > 0 ? static_cast<float>(spacing_sum / spacing_count) : 0.0f;
 
                     glm::vec3 normal(0.0f);
+                    const std::size_t m = std::min(found, normal_count);
+                    glm::dvec3 mean(0.0);
+                    for (std::size_t q = 0; q < m; ++q) {
+                        mean += glm::dvec3(positions[nearest.index(q)]);
+                    }
+                    mean /= static_cast<double>(std::max<std::size_t>(m, 1));
                     if (use_file_normals) {
                         normal = cloud.normals[i];
                         result.oriented[i] = 1;
                     } else {
-                        const std::size_t m = std::min(found, normal_count);
-                        glm::dvec3 mean(0.0);
-                        for (std::size_t q = 0; q < m; ++q) {
-                            mean += glm::dvec3(positions[nearest.index(q)]);
-                        }
-                        mean /= static_cast<double>(m);
                         double cov[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
                         for (std::size_t q = 0; q < m; ++q) {
                             const glm::dvec3 e = glm::dvec3(positions[nearest.index(q)]) - mean;
@@ -421,6 +441,7 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
                         result.oriented[i] = 1;
                     }
                     result.normals[i] = normal;
+                    result.edges[i] = surface_edge(mean - glm::dvec3(p), normal, result.spacing[i]);
                 }
                 done += leaf.end - leaf.begin;
             }

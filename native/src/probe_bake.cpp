@@ -28,6 +28,12 @@ constexpr std::uint64_t kNoPoint = std::numeric_limits<std::uint64_t>::max();
 // the point's id; bit 63 marks the far side of a cell surfel.
 constexpr std::uint64_t kFarSide = std::uint64_t{1} << 63;
 constexpr std::size_t kPointChunk = 65536;
+// A point whose neighbours' mean lies this far off it, in 1/64 spacings (0.6 spacings), is at
+// its surface's edge: inside a surface the 12 neighbours' mean lies within about 0.35 spacings
+// of the point (random sampling; near 0 on a scanner's regular pattern), at a straight edge
+// about one spacing inward.
+constexpr std::uint8_t kEdgeOffset = 38;
+
 // Below this |cos| between the texel ray and the surfel normal the surfel plane is too
 // grazing to extrapolate a depth from, and the point's own radial distance is used.
 constexpr float kMinPlaneCosine = 0.05f;
@@ -129,6 +135,10 @@ struct Surfel {
     float normal_v = 0.0f;
     float reach = 0.0f;
     float splat_angle = 0.0f; // the splat's angular radius seen face-on from the probe
+    // At a surface's edge: the unit direction to the surface's inside, and how far outward
+    // (metres) the disc reaches; a negative reach: not at an edge, the whole disc.
+    glm::vec3 inward{0.0f};
+    float edge_reach = -1.0f;
 };
 
 // Where the ray from the probe centre along unit `texel_dir` meets a point's surface plane:
@@ -139,6 +149,9 @@ struct PlaneHit {
     float cos_plane = 0.0f;
     float s = 0.0f;
     bool in_disc = false; // false too for a ray parallel to the plane (the disc seen edge-on)
+    // In the disc but past the surface's edge (Surfel::edge_reach): the point claims the texel
+    // only where no surface is known there.
+    bool beyond_edge = false;
 };
 
 PlaneHit plane_hit(const Surfel& p, const glm::vec3& texel_dir) {
@@ -151,6 +164,7 @@ PlaneHit plane_hit(const Surfel& p, const glm::vec3& texel_dir) {
     if (h.s > 0.0f) {
         const glm::vec3 off = h.s * texel_dir - p.v;
         h.in_disc = glm::dot(off, off) <= p.reach * p.reach;
+        h.beyond_edge = p.edge_reach >= 0.0f && glm::dot(off, p.inward) < -p.edge_reach;
     }
     return h;
 }
@@ -237,6 +251,10 @@ std::uint32_t ordered_bits(float non_negative) {
     return std::bit_cast<std::uint32_t>(non_negative);
 }
 
+// The sign bit of a texel's front depth (ordered_bits of a non-negative depth never sets it):
+// set where the front comes from splats past their surface's edge.
+constexpr std::uint32_t kBeyondEdge = 0x80000000u;
+
 // What a bake splats, visited j = 0 … count() - 1: id(j) names the visited point (a texel's
 // winner among equally central points is the smaller id), and the attributes are read by id.
 // Every point of a cloud, in spatial order: neighbouring points write neighbouring texels,
@@ -257,6 +275,9 @@ struct CloudPoints {
     [[nodiscard]] glm::vec3 normal(std::size_t i) const { return geometry.normals[i]; }
     [[nodiscard]] bool oriented(std::size_t i) const { return geometry.oriented[i] != 0; }
     [[nodiscard]] float spacing(std::size_t i) const { return geometry.spacing[i]; }
+    [[nodiscard]] SurfaceEdge edge(std::size_t i) const {
+        return geometry.edges.size() == cloud.size() ? geometry.edges[i] : SurfaceEdge{};
+    }
     [[nodiscard]] glm::vec3 colour(std::size_t i) const { return colours(i); }
     [[nodiscard]] static bool is_cell_surfel(std::size_t /*i*/) { return false; }
 };
@@ -288,6 +309,12 @@ struct CutPoints {
     [[nodiscard]] float spacing(std::size_t i) const {
         const CellSurfel* s = surfel(i);
         return s != nullptr ? s->spacing : geometry.spacing[cut.points[i]];
+    }
+    // A cell surfel stands for a whole cell's points: no edge of its own.
+    [[nodiscard]] SurfaceEdge edge(std::size_t i) const {
+        return surfel(i) == nullptr && geometry.edges.size() == cloud.size()
+                   ? geometry.edges[cut.points[i]]
+                   : SurfaceEdge{};
     }
     [[nodiscard]] glm::vec3 colour(std::size_t i) const {
         const CellSurfel* s = surfel(i);
@@ -347,6 +374,11 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
         p.normal = !source.oriented(i) && glm::dot(normal, p.v) > 0.0f ? -normal : normal;
         p.normal_v = glm::dot(p.normal, p.v);
         p.reach = settings.splat_plane_reach * settings.splat_scale * source.spacing(i);
+        const SurfaceEdge edge = source.edge(i);
+        if (settings.splat_edge_margin >= 0.0f && edge.offset >= kEdgeOffset) {
+            p.inward = glm::normalize(glm::vec3(edge.inward[0], edge.inward[1], edge.inward[2]));
+            p.edge_reach = settings.splat_edge_margin * source.spacing(i);
+        }
         return true;
     };
     // Calls visit(texel, surfel, plane hit) for every texel point i's splat covers: the texels
@@ -376,10 +408,11 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
                 }
                 // The point always claims its own texel; neighbours only inside its cone where
                 // their ray meets the point's surface plane near the point.
-                const PlaneHit hit = plane_hit(p, texel_dir);
+                PlaneHit hit = plane_hit(p, texel_dir);
                 if (!own && has_plane && !hit.in_disc) {
                     continue;
                 }
+                hit.beyond_edge = hit.beyond_edge && !own;
                 visit(t, p, hit);
             }
         }
@@ -403,11 +436,14 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
                           });
     };
 
-    // Pass 1: the nearest surface depth per texel.
-    std::vector<std::uint32_t> front(texels, ordered_bits(kEmptyDistance));
+    // Pass 1: the nearest surface depth per texel; splats past their surface's edge only where
+    // no other reaches (the depth's sign bit orders them last).
+    // All bits set: no splat yet (above every depth, of either kind).
+    std::vector<std::uint32_t> front(texels, ~std::uint32_t{0});
     over_points("splatting points: depth", [&](std::size_t i) {
         for_each_splat_texel(i, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
-            keep_smaller(front[t], ordered_bits(surfel_depth(p, hit)));
+            keep_smaller(front[t],
+                         (hit.beyond_edge ? kBeyondEdge : 0u) | ordered_bits(surfel_depth(p, hit)));
         });
     });
     // Pass 2: the points on that front surface (within a surface thickness of about the point
@@ -425,7 +461,10 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
         const glm::vec3 rgb = source.colour(i);
         for_each_splat_texel(i, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
             const float depth = surfel_depth(p, hit);
-            const float nearest = std::bit_cast<float>(front[t]);
+            if (hit.beyond_edge != ((front[t] & kBeyondEdge) != 0)) {
+                return; // a splat past its edge where another surface is known, or the reverse
+            }
+            const float nearest = std::bit_cast<float>(front[t] & ~kBeyondEdge);
             if (depth > nearest + std::max(thickness, 1e-3f * nearest)) {
                 return;
             }

@@ -271,7 +271,8 @@ json splat_settings_json(const BakeSettings& settings) {
                 {"max_splat_radius_texels", settings.max_splat_radius_texels},
                 {"hole_fill_texels", settings.hole_fill_texels},
                 {"min_distance", settings.min_distance},
-                {"lod_texels", settings.lod_texels}};
+                {"lod_texels", settings.lod_texels},
+                {"splat_edge_margin", settings.splat_edge_margin}};
 }
 
 } // namespace lfprobe

@@ -421,3 +421,71 @@ TEST(ProbeBake, ATexelsColourIsTheMeanOfTheFrontSurfacesPointsItCovers) {
         }
     }
 }
+
+TEST(ProbeBake, SilhouettesDoNotGrowByTheSplatRadius) {
+    // A 40 cm plate sampled every 2 cm, 0.6 m in front of the probe, before a far wall. Its
+    // edge points' spacing is 2.6 cm (fewer close neighbours), and they splat half of it past
+    // themselves, to 0.213 m; a full splat disc reaches 0.8 spacings past them and paints the
+    // plate over the far wall there, along its whole silhouette (what made 1 % of the lab
+    // room's pixels show the wrong surface).
+    PointCloud cloud;
+    add_wall_x(cloud, 0.6f, 0.02f, 0.02f, 0.2f);
+    add_wall_x(cloud, 3.0f, 0.01f, 0.01f, 1.5f);
+    cloud.scans.push_back(
+        ScanSource{"plate and wall", cloud.positions.size(), glm::dvec3(0.0), true});
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+
+    // Of the rays that pass the plate's plane in the band 0.214–0.22 m off its centre line
+    // along +y (|z| < 0.15 m), the fraction whose texel holds the plate.
+    auto plate_beyond_its_edge = [&](float edge_margin) {
+        BakeSettings settings;
+        settings.resolution = 1024;
+        settings.hole_fill_texels = 0;
+        settings.splat_edge_margin = edge_margin;
+        const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+        std::size_t band = 0;
+        std::size_t plate = 0;
+        for (int y = 0; y < map.resolution; ++y) {
+            for (int x = 0; x < map.resolution; ++x) {
+                const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
+                if (d.x <= 0.0f) {
+                    continue;
+                }
+                const glm::vec3 on_plane = d * (0.6f / d.x);
+                if (on_plane.y < 0.214f || on_plane.y > 0.22f || std::abs(on_plane.z) > 0.15f) {
+                    continue;
+                }
+                ++band;
+                plate += map.distance[oct::texel_index({x, y}, map.resolution)] < 1.0f ? 1 : 0;
+            }
+        }
+        return static_cast<double>(plate) / static_cast<double>(std::max<std::size_t>(band, 1));
+    };
+    const double clipped = plate_beyond_its_edge(BakeSettings{}.splat_edge_margin);
+    const double full_discs = plate_beyond_its_edge(-1.0f);
+    std::printf("plate seen 0.214-0.22 m off its centre (edge at 0.2 m): %.3f with edge splats, "
+                "%.3f with full "
+                "discs\n",
+                clipped, full_discs);
+    EXPECT_LT(clipped, 0.02);
+    EXPECT_GT(full_discs, 0.5);
+}
+
+TEST(LocalGeometry, PointsAtASurfacesEdgeKnowWhereItsInsideIs) {
+    PointCloud cloud;
+    add_wall_x(cloud, 0.6f, 0.02f, 0.02f, 0.2f); // 21 × 21 points, y and z from -0.2 to 0.2
+    cloud.scans.push_back(ScanSource{"plate", cloud.positions.size(), glm::dvec3(0.0), true});
+    const LocalGeometry g = estimate_local_geometry(cloud, {});
+    ASSERT_EQ(g.edges.size(), cloud.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        const glm::vec3 p = cloud.positions[i];
+        const SurfaceEdge& e = g.edges[i];
+        if (std::abs(p.y) < 0.15f && std::abs(p.z) < 0.15f) {
+            EXPECT_LT(e.offset, 10) << "an inner point at " << p.y << ", " << p.z;
+        } else if (p.y > 0.199f && std::abs(p.z) < 0.15f) {
+            EXPECT_GE(e.offset, 38) << "the edge point at z " << p.z;
+            EXPECT_LT(e.inward[1], -120); // its inside lies toward -y
+            EXPECT_EQ(e.inward[0], 0);    // in the plate's plane
+        }
+    }
+}

@@ -203,7 +203,8 @@ def bake_scans_on_cluster(
         settings = {"resolution": int(options.resolution), "splat_scale": float(options.splat_scale),
                     "hole_fill_texels": int(options.hole_fill_texels),
                     "normal_neighbours": int(options.normal_neighbours),
-                    "lod_texels": float(options.lod_texels)}
+                    "lod_texels": float(options.lod_texels),
+                    "splat_edge_margin": float(options.splat_edge_margin)}
         spec = CloudSpec(
             paths=tuple(os.path.abspath(str(p)) for p in scan_paths),
             scanners=tuple(tuple(map(float, s)) if s is not None else None for s in scanners),

@@ -56,6 +56,9 @@ class BakeOptions:
     # Scan bakes: how many texels apart the point hierarchy's cell surfels may be where they
     # stand in for the points (0: every point is splatted).
     lod_texels: float = field(default_factory=lambda: defaults.bake("lod_texels"))
+    # Scan bakes: how far, in point spacings, a point at its surface's edge splats outward
+    # (negative: full discs, which grow every silhouette by the splat radius).
+    splat_edge_margin: float = field(default_factory=lambda: defaults.bake("splat_edge_margin"))
     extra: dict = field(default_factory=dict)
     # None: every probe at `resolution`. A dict: plan first (bake --auto): per-probe resolution
     # from the data, classification, moves and drops, with these options of
@@ -133,7 +136,8 @@ def bake_from_cloud(
     if options.plan is not None:
         plan = {"resolution": int(options.resolution), "splat_scale": float(options.splat_scale),
                 "hole_fill_texels": int(options.hole_fill_texels),
-                "lod_texels": float(options.lod_texels), **options.plan}
+                "lod_texels": float(options.lod_texels),
+                "splat_edge_margin": float(options.splat_edge_margin), **options.plan}
         job = _native.start_bake_planned_probe_set(cloud, out_dir, **where, options=plan)
         if start_only:
             return job
@@ -142,7 +146,8 @@ def bake_from_cloud(
         kwargs = dict(where, resolution=int(options.resolution), splat_scale=float(options.splat_scale),
                       hole_fill_texels=int(options.hole_fill_texels),
                       normal_neighbours=int(options.normal_neighbours),
-                      lod_texels=float(options.lod_texels))
+                      lod_texels=float(options.lod_texels),
+                      splat_edge_margin=float(options.splat_edge_margin))
         if start_only:
             return _native.start_bake_probe_set(cloud, out_dir, **kwargs)
         summary = _native.bake_probe_set(cloud, out_dir, progress=progress, **kwargs)

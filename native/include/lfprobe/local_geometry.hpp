@@ -3,6 +3,7 @@
 // local point spacing that sizes the point's splat when it is baked into a probe.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -18,6 +19,15 @@ struct LocalGeometryOptions {
     bool keep_file_normals = true; // use normals the file carries instead of estimating
 };
 
+// Where a point lies at its surface's edge: the mean of its normal neighbours then lies off
+// it, toward the surface's inside, within the tangent plane. `inward` is that direction (int8
+// components, ×127), `offset` how far off the mean lies in 1/64 spacings (0 to 255). A
+// point inside its surface has an offset near 0. 4 bytes a point.
+struct SurfaceEdge {
+    std::int8_t inward[3] = {0, 0, 0};
+    std::uint8_t offset = 0;
+};
+
 struct LocalGeometry {
     std::vector<glm::vec3> normals; // unit; oriented toward the scanner where it is known
     std::vector<float> spacing;     // mean distance to the nearest neighbours, metres
@@ -25,6 +35,8 @@ struct LocalGeometry {
     // file gave normals); false means the sign is arbitrary and a baker orients it toward
     // its probe.
     std::vector<std::uint8_t> oriented;
+    // Per point (empty: not estimated, and no point is taken for an edge): see SurfaceEdge.
+    std::vector<SurfaceEdge> edges;
     // The points' indices in Morton (Z-curve) order of their positions: visiting points in this
     // order keeps neighbour searches and splat writes in cache, whatever order the file had.
     std::vector<std::uint32_t> spatial_order;

@@ -28,6 +28,13 @@ struct BakeSettings {
     // between scan lines whose spacing along the scanner's beam grows at oblique incidence
     // beyond the mean neighbour distance; two radii close them (measured on the demo scenes).
     float splat_plane_reach = 2.0f;
+    // A point at its surface's edge (SurfaceEdge: its neighbours lie to one side) splats more
+    // than this many point spacings outward (where the surface ends on average: somewhere
+    // between the last point and the next that is missing) only onto texels no other surface
+    // reaches. A full disc would grow every silhouette by its splat radius, foreground over
+    // the background along every edge; a clipped one would leave slivers unknown where the
+    // background was never scanned. Negative: full discs at edges too.
+    float splat_edge_margin = 0.5f;
     // Largest splat radius in texels; bounds the cost of points very close to a probe.
     int max_splat_radius_texels = 64;
     // Holes up to this many texels across are filled and marked inferred; larger stay unknown.

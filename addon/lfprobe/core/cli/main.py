@@ -42,6 +42,7 @@ def _cmd_bake(args) -> int:
         hole_fill_texels=args.hole_fill,
         normal_neighbours=args.normal_k,
         lod_texels=args.lod_texels,
+        splat_edge_margin=args.splat_edge_margin,
     )
     if args.auto:
         if args.mesh:
@@ -266,6 +267,9 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--splat-scale", type=float, default=defaults.bake("splat_scale"), help="splat radius / point spacing")
     bake.add_argument("--hole-fill", type=int, default=defaults.bake("hole_fill_texels"), help="largest hole (texels) to fill")
     bake.add_argument("--normal-k", type=int, default=defaults.bake("normal_neighbours"), help="neighbours for PCA normals")
+    bake.add_argument("--splat-edge-margin", type=float, default=defaults.bake("splat_edge_margin"),
+                      metavar="S", help="how far (point spacings) a point at its surface's edge splats "
+                                        "outward; negative: full discs (bakes before this option)")
     bake.add_argument("--lod-texels", type=float, default=defaults.bake("lod_texels"), metavar="T",
                       help="scans: where the point hierarchy's cell surfels are at most T texels apart "
                            "as the probe sees them they stand in for the points, so a probe's cost "
