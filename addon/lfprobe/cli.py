@@ -1,13 +1,16 @@
 """Headless batch entry of the Blender add-on: import scans, bake, add probes for views, render and
 compare a saved scene.
 
-    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- import --scan FILE... [--grid-from EMPTY] --save-as OUT.blend
-    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- bake [--grid NAME] [--storage full|compact]
-    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- place (--views CAMERA... | --camera-path)
-    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- render [--camera NAME] --out IMG.exr
-    blender -b scene.blend --python-exit-code 1 -P <add-on>/cli.py -- compare --reference OBJ... --out DIR
+    blender -b --python-exit-code 1 -P <add-on>/cli.py -- --open scene.blend import --scan FILE... [--grid-from EMPTY] --save-as OUT.blend
+    blender -b --python-exit-code 1 -P <add-on>/cli.py -- --open scene.blend bake [--grid NAME] [--storage full|compact]
+    blender -b --python-exit-code 1 -P <add-on>/cli.py -- --open scene.blend place (--views CAMERA... | --camera-path)
+    blender -b --python-exit-code 1 -P <add-on>/cli.py -- --open scene.blend render [--camera NAME] --out IMG.exr
+    blender -b --python-exit-code 1 -P <add-on>/cli.py -- --open scene.blend compare --reference OBJ... --out DIR
 
-The add-on is used as it is enabled in Blender (legacy add-on or extension), or else imported
+--open opens the .blend after the add-on is enabled, so Blender knows the render engine LFPROBE
+while loading it; `blender -b scene.blend ... -P cli.py -- COMMAND` works as well, but Blender
+then loads the file first and prints "Engine 'LFPROBE' not available" for a scene rendering with
+it (unless the add-on is enabled in Blender's preferences). The add-on is used as it is enabled in Blender (legacy add-on or extension), or else imported
 from the folder this file lies in (whose parent is put on sys.path) and enabled for this run
 only. Exit status: 0 success, 2 bad input (the message says what and where), 1 other
 failures, 130 cancelled. Run inside Blender only; the bpy-free command line is ./lfprobe.

@@ -32,9 +32,39 @@ struct Planes {
     std::vector<float> object; // empty when the image has no object channel
 };
 
-constexpr const char* kObjectChannel = "object";
+// The analysis channels, written as a pass name and a one-letter channel ("status.X"): Blender's
+// multilayer reader takes the last '.' token as the channel id and accepts only one letter (or
+// red, green, blue, alpha); Blender 3.4 drops a channel named "status" ("unknown channel token")
+// and so loses the pass. X is the id Blender itself gives one-channel passes (IndexOB.X, value
+// AOVs, this engine's LFP Status.X). Files written before carry the bare names; both are read.
+struct AnalysisChannel {
+    const char* name; // written
+    const char* old_name;
+};
+constexpr AnalysisChannel kStatus{"status.X", "status"};
+constexpr AnalysisChannel kProbe{"probe.X", "probe"};
+constexpr AnalysisChannel kSteps{"steps.X", "steps"};
+constexpr AnalysisChannel kObject{"object.X", "object"};
 
-Imf::FrameBuffer frame_buffer(RenderedImage& image, Planes& planes) {
+// The names of the analysis channels in one file.
+struct AnalysisNames {
+    const char* status = kStatus.name;
+    const char* probe = kProbe.name;
+    const char* steps = kSteps.name;
+    const char* object = kObject.name;
+};
+
+// The name `channel` has in `header`: the current one, else the older one; nullptr for neither.
+const char* find_analysis_channel(const Imf::Header& header, const AnalysisChannel& channel) {
+    for (const char* name : {channel.name, channel.old_name}) {
+        if (header.channels().findChannel(name) != nullptr) {
+            return name;
+        }
+    }
+    return nullptr;
+}
+
+Imf::FrameBuffer frame_buffer(RenderedImage& image, Planes& planes, const AnalysisNames& names) {
     const std::size_t w = static_cast<std::size_t>(image.width);
     Imf::FrameBuffer fb;
     auto interleaved = [&](const char* name, float* base, std::size_t stride) {
@@ -50,17 +80,17 @@ Imf::FrameBuffer frame_buffer(RenderedImage& image, Planes& planes) {
     for (std::size_t c = 0; c < 3; ++c) {
         interleaved(normal_names[c], image.normal.data() + c, 3);
     }
-    interleaved("status", planes.status.data(), 1);
-    interleaved("probe", planes.probe.data(), 1);
-    interleaved("steps", planes.steps.data(), 1);
+    interleaved(names.status, planes.status.data(), 1);
+    interleaved(names.probe, planes.probe.data(), 1);
+    interleaved(names.steps, planes.steps.data(), 1);
     if (!planes.object.empty()) {
-        interleaved(kObjectChannel, planes.object.data(), 1);
+        interleaved(names.object, planes.object.data(), 1);
     }
     return fb;
 }
 
-constexpr const char* kChannels[] = {"R",   "G",   "B",      "A",     "Z",    "N.X",
-                                     "N.Y", "N.Z", "status", "probe", "steps"};
+// Blender reads these as they are: R G B A as the Combined pass, Z as Depth, N.X N.Y N.Z as N.
+constexpr const char* kBaseChannels[] = {"R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z"};
 
 } // namespace
 
@@ -104,11 +134,15 @@ void write_rendered_exr(const std::string& path, const RenderedImage& image,
     }
     Imf::Header header(image.width, image.height);
     header.compression() = Imf::ZIP_COMPRESSION;
-    for (const char* name : kChannels) {
+    const AnalysisNames names;
+    for (const char* name : kBaseChannels) {
+        header.channels().insert(name, Imf::Channel(Imf::FLOAT));
+    }
+    for (const char* name : {names.status, names.probe, names.steps}) {
         header.channels().insert(name, Imf::Channel(Imf::FLOAT));
     }
     if (!planes.object.empty()) {
-        header.channels().insert(kObjectChannel, Imf::Channel(Imf::FLOAT));
+        header.channels().insert(names.object, Imf::Channel(Imf::FLOAT));
     }
     header.insert(kFormatAttribute, Imf::StringAttribute(kFormatValue));
     if (!metadata.empty()) {
@@ -119,7 +153,7 @@ void write_rendered_exr(const std::string& path, const RenderedImage& image,
         {
             Imf::OutputFile file(tmp.c_str(), header);
             // The writer only reads through the slices; one layout serves both directions.
-            file.setFrameBuffer(frame_buffer(const_cast<RenderedImage&>(image), planes));
+            file.setFrameBuffer(frame_buffer(const_cast<RenderedImage&>(image), planes, names));
             file.writePixels(image.height);
         }
         std::filesystem::rename(tmp, path);
@@ -142,13 +176,28 @@ RenderedImage read_rendered_exr(const std::string& path, std::string* metadata) 
         if (window.min.x != 0 || window.min.y != 0 || w < 1 || h < 1) {
             throw InputError(path + ": expected a data window starting at (0, 0)");
         }
-        for (const char* name : kChannels) {
+        const auto missing = [&](const std::string& name) {
+            return InputError(path + ": expected channel '" + name +
+                              "' of a rendered image (R G B A Z N.X N.Y N.Z status.X probe.X "
+                              "steps.X, or before them status probe steps)");
+        };
+        for (const char* name : kBaseChannels) {
             if (file.header().channels().findChannel(name) == nullptr) {
-                throw InputError(path + ": expected channel '" + name +
-                                 "' of a rendered image (R G B A Z N.X N.Y N.Z status probe "
-                                 "steps)");
+                throw missing(name);
             }
         }
+        const auto require = [&](const AnalysisChannel& channel) {
+            const char* name = find_analysis_channel(file.header(), channel);
+            if (name == nullptr) {
+                throw missing(channel.name);
+            }
+            return name;
+        };
+        AnalysisNames names;
+        names.status = require(kStatus);
+        names.probe = require(kProbe);
+        names.steps = require(kSteps);
+        names.object = find_analysis_channel(file.header(), kObject);
         if (metadata != nullptr) {
             const auto* attr =
                 file.header().findTypedAttribute<Imf::StringAttribute>(kMetadataAttribute);
@@ -159,10 +208,10 @@ RenderedImage read_rendered_exr(const std::string& path, std::string* metadata) 
         planes.status.resize(image.pixel_count());
         planes.probe.resize(image.pixel_count());
         planes.steps.resize(image.pixel_count());
-        if (file.header().channels().findChannel(kObjectChannel) != nullptr) {
+        if (names.object != nullptr) {
             planes.object.resize(image.pixel_count());
         }
-        file.setFrameBuffer(frame_buffer(image, planes));
+        file.setFrameBuffer(frame_buffer(image, planes, names));
         file.readPixels(0, h - 1);
         // The integer channels are floats in the file: a value that is no whole number in
         // range (NaN, 1e30) would be undefined behaviour to convert.
@@ -177,15 +226,15 @@ RenderedImage read_rendered_exr(const std::string& path, std::string* metadata) 
         constexpr double kIndexMax = 2147483647.0;
         for (std::size_t i = 0; i < image.pixel_count(); ++i) {
             image.status[i] =
-                static_cast<std::uint8_t>(whole(planes.status[i], 0.0, 2.0, "status"));
+                static_cast<std::uint8_t>(whole(planes.status[i], 0.0, 2.0, names.status));
             image.probe[i] =
-                static_cast<std::int32_t>(whole(planes.probe[i], -1.0, kIndexMax, "probe"));
+                static_cast<std::int32_t>(whole(planes.probe[i], -1.0, kIndexMax, names.probe));
             image.steps[i] =
-                static_cast<std::uint32_t>(whole(planes.steps[i], 0.0, 4294967295.0, "steps"));
+                static_cast<std::uint32_t>(whole(planes.steps[i], 0.0, 4294967295.0, names.steps));
         }
         for (const float o : planes.object) {
             image.object.push_back(
-                static_cast<std::int32_t>(whole(o, -1.0, kIndexMax, kObjectChannel)));
+                static_cast<std::int32_t>(whole(o, -1.0, kIndexMax, names.object)));
         }
         return image;
     } catch (const InputError&) {

@@ -1,6 +1,6 @@
 """Reads the channels of an uncompressed scanline OpenEXR file (what Blender writes with codec
 NONE: single-part in 3.4, multi-part in 5.0) into numpy arrays, so that tests can look at
-every render pass of a multilayer EXR."""
+every render pass of a multilayer EXR; writes such a file with any channel names."""
 
 from __future__ import annotations
 
@@ -79,3 +79,35 @@ def read_exr_channels(path: str) -> dict:
                                                 offset=cursor)
                 cursor += width * np.dtype(dtype).itemsize
     return arrays
+
+
+def write_exr_channels(path: str, channels: dict) -> None:
+    """Writes {channel name: (h, w) float32 array, top row first} as an uncompressed single-part
+    scanline EXR: a file with whatever channel names a test needs (files other writers made,
+    or lfprobe wrote before)."""
+    names = sorted(channels)  # the channel list and each scanline hold channels by name
+    height, width = np.asarray(channels[names[0]]).shape
+    planes = [np.ascontiguousarray(channels[name], dtype="<f4") for name in names]
+
+    def attribute(name: str, type_name: str, value: bytes) -> bytes:
+        return name.encode() + b"\0" + type_name.encode() + b"\0" + struct.pack("<i", len(value)) + value
+
+    chlist = b"".join(name.encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1) for name in names) + b"\0"
+    window = struct.pack("<iiii", 0, 0, width - 1, height - 1)
+    header = b"".join([
+        attribute("channels", "chlist", chlist),
+        attribute("compression", "compression", b"\0"),
+        attribute("dataWindow", "box2i", window),
+        attribute("displayWindow", "box2i", window),
+        attribute("lineOrder", "lineOrder", b"\0"),
+        attribute("pixelAspectRatio", "float", struct.pack("<f", 1.0)),
+        attribute("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0)),
+        attribute("screenWindowWidth", "float", struct.pack("<f", 1.0)),
+    ]) + b"\0"
+    start = 8 + len(header) + 8 * height
+    line_bytes = 8 + 4 * width * len(names)
+    offsets = struct.pack(f"<{height}Q", *(start + y * line_bytes for y in range(height)))
+    lines = b"".join(struct.pack("<ii", y, 4 * width * len(names)) + b"".join(p[y].tobytes() for p in planes)
+                     for y in range(height))
+    with open(path, "wb") as stream:
+        stream.write(b"\x76\x2f\x31\x01" + struct.pack("<I", 2) + header + offsets + lines)

@@ -102,26 +102,30 @@ def traced_scene():
     return add_grid(folder), add_camera()
 
 
-def blender_command(blend: str, *args: str) -> list:
-    """The command line that runs the add-on's batch CLI on `blend`: Blender's own binary, or,
-    with the bpy wheel (no binary), the wheel's Python opening the file and running cli.py."""
+def blender_command(blend: str, *args: str, opened_first: bool = False) -> list:
+    """The command line that runs the add-on's batch CLI on `blend` (cli.py -- --open BLEND ...):
+    Blender's own binary, or, with the bpy wheel (no binary), the wheel's Python running cli.py.
+    opened_first: the form that has Blender open the file before cli.py enables the add-on
+    (blender -b BLEND -P cli.py -- ...; with the wheel, open_mainfile first)."""
     cli = os.path.join(helpers.ADDON_DIR, "cli.py")
+    args = list(args) if opened_first else ["--open", blend, *args]
     if bpy.app.binary_path and not bpy.app.binary_path.endswith(("python", "python3")):
-        return [bpy.app.binary_path, "-b", "--factory-startup", blend, "--python-exit-code", "1", "-P", cli,
-                "--", *args]
+        return [bpy.app.binary_path, "-b", "--factory-startup", *([blend] if opened_first else []),
+                "--python-exit-code", "1", "-P", cli, "--", *args]
     import sys
 
     script = (
         "import runpy, sys, bpy; "
-        f"bpy.ops.wm.open_mainfile(filepath={blend!r}); "
-        f"sys.argv = [{cli!r}, '--', *{list(args)!r}]; "
+        + (f"bpy.ops.wm.open_mainfile(filepath={blend!r}); " if opened_first else "")
+        + f"sys.argv = [{cli!r}, '--', *{args!r}]; "
         f"runpy.run_path({cli!r}, run_name='__main__')"
     )
     return [sys.executable, "-c", script]
 
 
-def run_batch(blend: str, *args: str, timeout: int = 300) -> subprocess.CompletedProcess:
-    return subprocess.run(blender_command(blend, *args), capture_output=True, text=True, timeout=timeout)
+def run_batch(blend: str, *args: str, timeout: int = 300, opened_first: bool = False) -> subprocess.CompletedProcess:
+    return subprocess.run(blender_command(blend, *args, opened_first=opened_first), capture_output=True, text=True,
+                          timeout=timeout)
 
 
 def lfprobe_cli(*args: str) -> subprocess.CompletedProcess:

@@ -1,7 +1,8 @@
 """The headless batch CLI end to end, as a pipeline runs it: a saved scene with an imported
-scan, a probe grid and a camera is baked, rendered and compared by `blender -b scene.blend
--P addon/lfprobe/cli.py -- ...` in a separate Blender; bad input gives a clear message and a
-non-zero exit."""
+scan, a probe grid and a camera is baked, rendered and compared by `blender -b -P
+addon/lfprobe/cli.py -- --open scene.blend ...` in a separate Blender; bad input gives a clear
+message and a non-zero exit; a scene rendering with the engine opens without Blender reporting
+the engine missing."""
 
 from __future__ import annotations
 
@@ -99,6 +100,33 @@ def test_bad_input_exits_non_zero_with_a_message():
     result = probe_scene.run_batch(blend, "paint")
     assert result.returncode == 2
     _check(result, "usage:")
+    # --open of a .blend that is not there, or of a file that is no .blend.
+    not_blend = os.path.join(folder, "not_a.blend")
+    with open(not_blend, "w", encoding="utf-8") as stream:
+        stream.write("not a blend file\n")
+    for path, fragment in ((os.path.join(folder, "nope.blend"), "no such .blend"), (not_blend, "cannot open")):
+        result = probe_scene.run_batch(path, "bake")
+        assert result.returncode == 2, (path, result.stdout + result.stderr)
+        _check(result, fragment, os.path.basename(path))
+
+
+def test_a_scene_rendering_with_the_engine_opens_without_engine_not_available():
+    """The .blend of a scene set to the engine LFPROBE, opened by --open once the add-on is
+    enabled: no "Engine 'LFPROBE' not available" before the command's output. Opened by Blender
+    before cli.py (blender -b scene.blend -P cli.py), Blender prints it: the control."""
+    probe_scene.traced_scene()
+    assert bpy.context.scene.render.engine == "LFPROBE"
+    folder = helpers.tmp_dir()
+    blend = os.path.join(folder, "engine.blend")
+    bpy.ops.wm.save_as_mainfile(filepath=blend)
+    message = "Engine 'LFPROBE' not available"
+    for opened_first in (False, True):
+        out = os.path.join(folder, f"view_{opened_first}.exr")
+        result = probe_scene.run_batch(blend, "render", "--out", out, opened_first=opened_first)
+        assert result.returncode == 0, result.stdout + result.stderr
+        output = _check(result, "rays/s")
+        assert (message in output) == opened_first, (opened_first, output)
+        assert os.path.isfile(out)
 
 
 def test_import_sets_up_a_grid_that_bakes_and_compares_by_collection():

@@ -440,37 +440,41 @@ TEST(Render, ACameraWhoseRaysAreNotFiniteIsAClearErrorInEveryMode) {
 
 TEST(Render, AnImageWhoseIntegerChannelsAreNotWholeNumbersIsRefused) {
     // The status, probe and steps channels are floats in the file; NaN or 1e30 there must not
-    // reach an integer conversion.
+    // reach an integer conversion, under the names written now and under the older ones.
     const std::string path =
         (std::filesystem::temp_directory_path() /
          ("lfprobe_bad_status_" + std::to_string(std::random_device{}()) + ".exr"))
             .string();
-    const char* channels[] = {"R",   "G",   "B",      "A",     "Z",    "N.X",
-                              "N.Y", "N.Z", "status", "probe", "steps"};
-    for (const float bad : {1.0f, std::nanf(""), 1e30f, 2.5f}) {
-        // Every channel a float plane of zeros, one status value bad (1: a HIT, the control).
-        const int w = 4;
-        const int h = 3;
-        std::vector<std::vector<float>> planes(std::size(channels),
-                                               std::vector<float>(w * h, 0.0f));
-        planes[8][5] = bad;
-        Imf::Header header(w, h);
-        Imf::FrameBuffer frame;
-        for (std::size_t c = 0; c < std::size(channels); ++c) {
-            header.channels().insert(channels[c], Imf::Channel(Imf::FLOAT));
-            frame.insert(channels[c],
-                         Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(planes[c].data()),
-                                    sizeof(float), sizeof(float) * w));
-        }
-        {
-            Imf::OutputFile file(path.c_str(), header);
-            file.setFrameBuffer(frame);
-            file.writePixels(h);
-        }
-        if (bad == 1.0f) {
-            EXPECT_EQ(read_rendered_exr(path).status[5], 1);
-        } else {
-            EXPECT_THROW((void)read_rendered_exr(path), InputError) << bad;
+    const char* current[] = {"R",   "G",   "B",        "A",       "Z",      "N.X",
+                             "N.Y", "N.Z", "status.X", "probe.X", "steps.X"};
+    const char* older[] = {"R",   "G",   "B",      "A",     "Z",    "N.X",
+                           "N.Y", "N.Z", "status", "probe", "steps"};
+    for (const auto* channels : {current, older}) {
+        for (const float bad : {1.0f, std::nanf(""), 1e30f, 2.5f}) {
+            // Every channel a float plane of zeros, one status value bad (1: a HIT, the control).
+            const int w = 4;
+            const int h = 3;
+            std::vector<std::vector<float>> planes(std::size(current),
+                                                   std::vector<float>(w * h, 0.0f));
+            planes[8][5] = bad;
+            Imf::Header header(w, h);
+            Imf::FrameBuffer frame;
+            for (std::size_t c = 0; c < std::size(current); ++c) {
+                header.channels().insert(channels[c], Imf::Channel(Imf::FLOAT));
+                frame.insert(channels[c],
+                             Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(planes[c].data()),
+                                        sizeof(float), sizeof(float) * w));
+            }
+            {
+                Imf::OutputFile file(path.c_str(), header);
+                file.setFrameBuffer(frame);
+                file.writePixels(h);
+            }
+            if (bad == 1.0f) {
+                EXPECT_EQ(read_rendered_exr(path).status[5], 1) << channels[8];
+            } else {
+                EXPECT_THROW((void)read_rendered_exr(path), InputError) << bad << channels[8];
+            }
         }
     }
     std::filesystem::remove(path);

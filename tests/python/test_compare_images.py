@@ -25,7 +25,7 @@ from lfprobe.core.compare import write_png
 import sys
 
 sys.path.insert(0, os.path.join(ROOT, "tests", "blender"))
-from exr_channels import read_exr_channels as independent_exr  # noqa: E402
+from exr_channels import read_exr_channels as independent_exr, write_exr_channels  # noqa: E402
 
 WIDTH, HEIGHT = 64, 48
 SCRIPT = os.path.join(ROOT, "tests", "blender", "write_compare_images.py")
@@ -220,3 +220,24 @@ def test_lfprobe_against_lfprobe_gives_the_figures_it_always_gave(native, render
     assert figures["computed"] == ["psnr", "ssim", "flip", "psnr_answered", *metrics.GEOMETRY_METRICS]
     table = run_cli("compare", ref_path, test_path, check=True).stdout
     assert "confusion     test HIT" in table and "not computed" not in table
+
+
+def test_renders_with_the_older_channel_names_read_as_before(native, renders, tmp_path):
+    """A render names its analysis channels as Blender passes (status.X, probe.X, steps.X); one
+    written before, with the single-token status, probe, steps, still reads as lfprobe's own
+    EXR: the same planes, and compare measures it with every figure."""
+    new_path = renders["nearest"]
+    channels, _size = image_files.read_exr_channels(str(new_path))
+    assert {"status.X", "probe.X", "steps.X"} <= set(channels)
+    assert not {"status", "probe", "steps"} & set(channels)
+    old_names = {"status.X": "status", "probe.X": "probe", "steps.X": "steps"}
+    old_path = tmp_path / "older.exr"
+    write_exr_channels(str(old_path), {old_names.get(name, name): plane for name, plane in channels.items()})
+    old, new = image_files.read_any_image(str(old_path)), image_files.read_any_image(str(new_path))
+    assert old["source"] == new["source"] == "lfprobe EXR"
+    for key in ("rgba", "depth", "normal", "status", "probe", "steps"):
+        assert np.array_equal(old[key], new[key]), key
+    figures = _compare_json(renders["bilinear"], old_path)
+    assert figures["test_source"] == "lfprobe EXR" and figures["not_computed"] == {}
+    assert figures == {**_compare_json(renders["bilinear"], new_path), "compare_seconds": figures["compare_seconds"],
+                       "test": figures["test"], "test_render_seconds": None}

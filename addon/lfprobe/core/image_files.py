@@ -26,8 +26,18 @@ EXR_MAGIC = b"\x76\x2f\x31\x01"
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 JPEG_MAGIC = b"\xff\xd8\xff"
 
-# What the native reader demands: a file holding all of these is lfprobe's own render.
-LFPROBE_CHANNELS = ("R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z", "status", "probe", "steps")
+# What the native reader demands: a file holding all of these is lfprobe's own render. The
+# analysis channels are written as passes Blender reads (status.X; Blender 3.4 drops a one-token
+# name such as status: "unknown channel token"); older files carry those names and read as well.
+LFPROBE_CHANNELS = ("R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z")
+LFPROBE_ANALYSIS_CHANNELS = (("status.X", "status"), ("probe.X", "probe"), ("steps.X", "steps"))
+
+
+def is_lfprobe_render(channel_names) -> bool:
+    """Whether an EXR with these channels is lfprobe's own render (under either naming)."""
+    names = set(channel_names)
+    return (all(c in names for c in LFPROBE_CHANNELS)
+            and all(any(c in names for c in either) for either in LFPROBE_ANALYSIS_CHANNELS))
 
 
 class ImageFileError(InputError):
@@ -121,7 +131,7 @@ def read_any_image(path: str) -> Dict[str, object]:
         magic = stream.read(8)
     if magic.startswith(EXR_MAGIC):
         channels, size = read_exr_channels(path)
-        if all(c in channels for c in LFPROBE_CHANNELS):
+        if is_lfprobe_render(channels):
             try:
                 image = dict(native.load().read_image(path))
             except native.NativeModuleError:

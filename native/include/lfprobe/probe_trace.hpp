@@ -27,7 +27,7 @@
 
 namespace lfprobe {
 
-// The answer for one ray; the numeric values are those of the images' "status" channel.
+// The answer for one ray; the numeric values are those of the images' "status.X" channel.
 enum class TraceStatus : std::uint8_t {
     Miss = 0,    // nothing before t_max: passed in front of every surface or through empty texels
     Hit = 1,     // met a surface the probe saw, facing the ray

@@ -19,7 +19,7 @@ struct RenderedImage {
     std::vector<std::uint8_t> status; // TraceStatus values
     std::vector<std::int32_t> probe;  // -1 where no probe answered
     std::vector<std::uint32_t> steps; // texels visited (splats: points covering the pixel)
-    // Optional: the mesh object seen (ground truth), -1 none. Empty = no "object" channel; the
+    // Optional: the mesh object seen (ground truth), -1 none. Empty = no "object.X" channel; the
     // reader fills it only when the file has one.
     std::vector<std::int32_t> object;
 

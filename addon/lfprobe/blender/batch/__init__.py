@@ -1,6 +1,6 @@
-"""The add-on's batch commands, run headless by cli.py (blender -b scene.blend -P cli.py --
-COMMAND ...) once the add-on is enabled: arguments.py parses, commands.py runs, and main()
-turns errors into the messages and exit statuses README.md lists."""
+"""The add-on's batch commands, run headless by cli.py (blender -b -P cli.py -- --open
+scene.blend COMMAND ...) once the add-on is enabled: arguments.py parses, commands.py runs, and
+main() opens the .blend and turns errors into the messages and exit statuses README.md lists."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ import sys
 from ...core import native as native_loader
 from ...core.errors import InputError
 from .arguments import build_parser
+from .scene_access import open_blend
 from .status import EXIT_BAD_INPUT, EXIT_CANCELLED, EXIT_FAILURE, BatchError
 
 
@@ -25,6 +26,8 @@ def main(argv=None) -> int:
         print(f"lfprobe: error: {error}", file=sys.stderr)
         return EXIT_FAILURE
     try:
+        if args.open:
+            open_blend(args.open)
         return args.run(args)
     except BatchError as error:
         print(f"lfprobe: error: {error}", file=sys.stderr)

@@ -1,4 +1,4 @@
-"""The batch command line's options (blender -b FILE.blend -P cli.py -- COMMAND ...)."""
+"""The batch command line's options (blender -b -P cli.py -- --open FILE.blend COMMAND ...)."""
 
 from __future__ import annotations
 
@@ -18,8 +18,12 @@ def _add_storage_arguments(parser) -> None:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="blender -b scene.blend --python-exit-code 1 -P cli.py --",
+        prog="blender -b --python-exit-code 1 -P cli.py --",
         description="Bake, render and compare the light field probes of a saved Blender scene.")
+    parser.add_argument("--open", default="", metavar="FILE.blend",
+                        help="the .blend to work on, opened once the add-on is enabled (blender -b FILE.blend "
+                             "-P cli.py opens it before, and Blender reports the engine LFPROBE of a scene "
+                             "as not available)")
     parser.add_argument("--scene", default="", help="scene to use (default: the file's active scene)")
     sub = parser.add_subparsers(dest="command", required=True)
 

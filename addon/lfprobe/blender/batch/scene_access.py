@@ -3,11 +3,25 @@ they store options and save, with BatchError for what is missing."""
 
 from __future__ import annotations
 
+import os
+
 import bpy
 
 from .. import grid as grid_module
 from ..scene_objects import object_of_type
 from .status import BatchError
+
+
+def open_blend(path: str) -> None:
+    """Opens the .blend of --open. The add-on is enabled by then, so Blender knows the render
+    engine LFPROBE while it loads the file; opened by Blender's own command line, before cli.py
+    runs, a scene rendering with it makes Blender print "Engine 'LFPROBE' not available"."""
+    if not os.path.isfile(path):
+        raise BatchError(f"no such .blend: {path}")
+    try:
+        bpy.ops.wm.open_mainfile(filepath=os.path.abspath(path), load_ui=False)
+    except RuntimeError as error:
+        raise BatchError(f"cannot open {path}: {error}") from error
 
 
 def scene_named(name: str):
