@@ -45,5 +45,10 @@ def register():
 
 
 def unregister():
+    if _registered:
+        # Jobs still running (a bake, an import) stop before their operators go.
+        import importlib
+
+        importlib.import_module(f"{__name__}.blender.operators.job_modal").release_running_jobs()
     while _registered:
         _registered.pop().unregister()

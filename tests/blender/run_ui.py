@@ -116,6 +116,29 @@ def scenario():
     _check("a cancelled bake keeps the previous probe set",
            open(os.path.join(probe_dir, "manifest.json")).read() == manifest_before)
 
+    # Disabling the add-on during a bake stops the bake (no job left running, no staging
+    # folder), and enabled again it bakes.
+    _invoke(bpy.ops.object.lfprobe_bake, grid=grid_obj.name)
+    yield 1.0
+    baking = list(jobs)
+    helpers.disable_addon()
+    yield 0.3
+    _check("disabling the add-on stops a running bake",
+           baking == ["Probe bake"] and not jobs and not os.path.exists(staging),
+           f"running before {baking}, after {jobs}; staging left: {os.path.exists(staging)}")
+    helpers.enable_addon()
+    jobs = helpers.addon("blender.operators.job_modal").running_labels
+    grid_obj.lfprobe_grid.resolution = 64
+    grid_obj.lfprobe_grid.counts = (2, 2, 1)
+    with bpy.context.temp_override(**_window_context()):
+        can_bake = bpy.ops.object.lfprobe_bake.poll()
+    started = _invoke(bpy.ops.object.lfprobe_bake, grid=grid_obj.name)
+    deadline = time.monotonic() + TIMEOUT
+    while jobs and time.monotonic() < deadline:
+        yield 0.05
+    _check("enabled again, the add-on bakes", can_bake and started == {"RUNNING_MODAL"}
+           and len(grid_obj.lfprobe_grid.coverage()) == 4, (can_bake, started))
+
     # The overlay draws the grid with this Blender's builtin shaders.
     overlay = helpers.addon("blender.ui.overlay")
     overlay._batch_cache.clear()

@@ -17,6 +17,23 @@ POLL_SECONDS = 0.1
 
 # Labels of the jobs running modal now (the panels and the UI test look at it).
 running_labels: list = []
+# The modal operators running now, so that disabling the add-on can stop their jobs.
+_running: list = []
+
+
+def release_running_jobs() -> None:
+    """Stops every job still running modal and ends its operator: the add-on is being disabled.
+    Blender drops the modal handlers of the operator classes it unregisters, so a job left
+    running would never be concluded: its label would keep Bake's poll False and the status
+    bar showing it until Blender restarts, and its staging folder would stay."""
+    context = bpy.context
+    for operator in list(_running):
+        try:
+            operator.cancel(context)
+        except ReferenceError:  # Blender already freed the operator
+            pass
+    _running.clear()
+    running_labels.clear()
 
 
 class NativeJobOperator:
@@ -56,6 +73,7 @@ class NativeJobOperator:
         wm.progress_begin(0, 1000)
         wm.modal_handler_add(self)
         running_labels.append(self.job_label)
+        _running.append(self)
         self._status(context, f"{self.job_label}: starting (Esc cancels)")
         return {"RUNNING_MODAL"}
 
@@ -92,7 +110,10 @@ class NativeJobOperator:
             wm.event_timer_remove(self._timer)
             self._timer = None
             wm.progress_end()
-            running_labels.remove(self.job_label)
+            if self.job_label in running_labels:
+                running_labels.remove(self.job_label)
+        if self in _running:
+            _running.remove(self)
         self._status(context, None)
 
     def _status(self, context, text):
