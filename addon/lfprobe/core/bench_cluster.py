@@ -91,7 +91,8 @@ def main(args) -> int:
               f"({local_wall / cluster_wall:.2f}× the 1 process); {c['tasks']} tasks; "
               f"set identical to the 1-process bake: {'yes' if identical else 'NO'}")
         print(f"  each worker read {c['bytes_read_per_worker'] / 2**20:.1f} MiB (the parse cache) and "
-              f"prepared the cloud in {c['prepare_seconds_per_worker']:.2f} s; "
+              f"prepared the cloud in {c['prepare_seconds_per_worker']:.2f} s, peak memory "
+              f"{c['peak_memory_per_worker'] / 2**20:.0f} MiB; "
               f"{c['seconds_per_probe']:.3f} s a probe on a worker")
         print(f"  scheduler: {1000 * per_task:.2f} ms a task (round trip of {2000} trivial tasks)")
         print(f"  this machine has {os.cpu_count()} cores: the {workers} workers share them and each "
@@ -120,6 +121,10 @@ def main(args) -> int:
               f"{bake_time / 60:.1f} min baking + {prepare_time / 60:.1f} min preparing its cloud + "
               f"{per_worker * per_task:.1f} s of scheduling: {total / 60:.1f} min in all, against "
               f"{PROBES * probe_seconds / cores / 3600:.1f} h for one such machine")
+        memory_per_point = c["peak_memory_per_worker"] / points  # the whole process, at this size
+        print(f"  memory a worker: about {task_points * memory_per_point / 2**30:.1f} GiB for its "
+              f"{task_points:,} points at this run's {memory_per_point:.0f} bytes a point (peak of the "
+              "worker process: cloud, normals, hierarchy, one probe's maps, the interpreter)")
         print(f"  not built: loading only the stations a task sees; today each worker loads the whole "
               f"cloud, {STATIONS * POINTS_PER_STATION * bytes_per_point / 2**40:.2f} TiB for this building")
         results["cluster"] = {
@@ -128,6 +133,7 @@ def main(args) -> int:
             "cluster_probes_per_second": probes / cluster_wall, "identical": identical,
             "bytes_read_per_worker": c["bytes_read_per_worker"],
             "prepare_seconds_per_worker": c["prepare_seconds_per_worker"],
+            "peak_memory_per_worker": c["peak_memory_per_worker"],
             "worker_seconds_per_probe": c["seconds_per_probe"],
             "scheduler_seconds_per_task": per_task,
             "paper": {"stations": STATIONS, "points_per_station": POINTS_PER_STATION, "probes": PROBES,

@@ -23,6 +23,7 @@ import dataclasses
 import json
 import logging
 import os
+import resource
 import threading
 import time
 from dataclasses import dataclass
@@ -115,6 +116,8 @@ def bake_probe_batch(spec_fields: dict, positions: list, indices: list, staging:
         "hierarchy_seconds": source.hierarchy_seconds if fresh else 0.0,
         "bake_seconds": time.perf_counter() - prepared,
         "bytes_read": _bytes_read(spec) if fresh else 0,
+        # The worker process's peak resident memory so far (Linux reports KiB).
+        "peak_memory_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
     }
 
 
@@ -337,6 +340,7 @@ def _figures(results: list, probes: int, tasks: int, tasks_seconds: float, clust
             "seconds_per_probe": bake / probes if probes else 0.0,
             "prepare_seconds_per_worker": (sum(prepare) / len(prepare)) if prepare else 0.0,
             "bytes_read_per_worker": max([r["bytes_read"] for r in results] or [0]),
+            "peak_memory_per_worker": max([r["peak_memory_bytes"] for r in results] or [0]),
             "overhead_seconds_per_task": overhead,
         },
     }

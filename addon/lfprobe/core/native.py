@@ -27,6 +27,13 @@ def _diagnose() -> str:
             "Run `bash tools/setup.sh` in the lfprobe checkout to build it."
         )
     names = ", ".join(os.path.basename(b) for b in built)
+    if wanted in (os.path.basename(b) for b in built):
+        # The right file, which the loader refused: damaged, half-written by a build still
+        # running, or missing a library it links.
+        return (
+            f"lfprobe's native module {os.path.join(_PACKAGE_DIR, wanted)} is there but cannot be "
+            "loaded; if a build is running, wait for it, else run `bash tools/setup.sh` again"
+        )
     return (
         f"lfprobe's native module was built for another Python: found {names}, but Python "
         f"{sys.version.split()[0]} needs {wanted}. Rebuild it with this Python "
