@@ -5,7 +5,7 @@
 # and the interactive paths (modal import and bake, Esc, overlay and panel drawing) in a
 # Blender 3.4.1 window under Xvfb (the wheel has no windows).
 # Usage: bash tools/blender_tests.sh [test name substrings]   (e.g. test_import bake; the
-# window check runs only without names)
+# window checks run only without names)
 set -u
 cd "$(dirname "$0")/.."
 
@@ -46,5 +46,14 @@ if [ $# -eq 0 ]; then
         status=1
     fi
     rm -f "$log"
+    echo "== Blender 3.4.1 window under Xvfb: Esc at F12, a real key press (xdotool)"
+    if ! command -v xdotool >/dev/null; then
+        echo "blender_tests: xdotool is not installed (apt-get install xdotool)" >&2
+        status=1
+    elif ! xvfb-run -a -s "-screen 0 1280x800x24" \
+        blender --factory-startup -P tests/blender/run_f12_esc.py; then
+        echo "blender_tests: Esc did not stop F12 in time" >&2
+        status=1
+    fi
 fi
 exit $status

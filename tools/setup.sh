@@ -10,7 +10,7 @@ packages=(
   pybind11-dev libembree-dev libopenexr-dev libglm-dev libtbb-dev
   nlohmann-json3-dev libfast-float-dev libgtest-dev libstb-dev libxxhash-dev
   python3-skimage python3-pip python3-matplotlib python3-open3d python3-distributed blender xvfb
-  xauth clang-format
+  xauth xdotool clang-format
 )
 missing=()
 for p in "${packages[@]}"; do
