@@ -488,12 +488,11 @@ PYBIND11_MODULE(_native, m) {
             bool positions_in_world, const std::string& sources_json, float splat_scale,
             int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours,
             float lod_texels, float splat_edge_margin, const py::object& progress) {
-            auto job =
-                start_bake_fn(std::move(cloud), folder, resolution, std::move(positions),
-                              std::move(grid_min), std::move(grid_max), std::move(counts),
-                              positions_in_world, sources_json, splat_scale, hole_fill_texels,
-                              max_splat_radius_texels, normal_neighbours, lod_texels,
-                              splat_edge_margin);
+            auto job = start_bake_fn(std::move(cloud), folder, resolution, std::move(positions),
+                                     std::move(grid_min), std::move(grid_max), std::move(counts),
+                                     positions_in_world, sources_json, splat_scale,
+                                     hole_fill_texels, max_splat_radius_texels, normal_neighbours,
+                                     lod_texels, splat_edge_margin);
             return job->run(progress);
         },
         py::arg("cloud"), py::arg("folder"), py::arg("resolution") = defaults.resolution,
@@ -526,6 +525,18 @@ PYBIND11_MODULE(_native, m) {
         py::arg("folder"), py::arg("storage"), py::arg("distance_step") = 0.0,
         "Sets how the set's probes load into memory (its manifest's \"storage\"; the EXR files "
         "keep full precision) and the manifest's per-probe memory_bytes.");
+    m.def(
+        "probe_storage",
+        [](const py::object& storage, double distance_step) {
+            const std::optional<ProbeStorage> chosen = storage_from(storage, distance_step);
+            if (!chosen.has_value()) {
+                throw InputError("probe_storage: give \"full\", \"compact\" or a dict");
+            }
+            return storage_dict(*chosen);
+        },
+        py::arg("storage"), py::arg("distance_step") = 0.0,
+        "A storage (\"full\", \"compact\" with distance_step) as a manifest records it, with "
+        "bytes_per_texel: what a probe of N² texels takes in memory is N² times that.");
     m.def(
         "read_probe", [](const std::string& path) { return probe_dict(read_probe_exr(path)); },
         py::arg("path"),

@@ -244,3 +244,30 @@ def test_settings_default_to_the_native_cores_defaults():
     assert render["blend"].default == defaults["trace"]["blend"]
     grid = helpers.addon("blender.properties").LFProbeGridProperties.bl_rna.properties
     assert grid["resolution"].default == defaults["bake"]["resolution"]
+
+
+def test_f12_states_its_cost_before_it_runs():
+    """The render panel's estimate: the rays F12 traces, and after a first render the time at
+    that render's rate; the grid panel's: what the next Bake holds in memory."""
+    grid, _camera = probe_scene.traced_scene()
+    estimates = helpers.addon("core.estimates")
+    estimates._last_rays_per_second = None
+    scene = bpy.context.scene
+    render, samples = scene.render, scene.lfprobe_render.samples
+    text, _warn = estimates.render_time_text(render.resolution_x, render.resolution_y,
+                                             render.resolution_percentage, samples)
+    assert "after a first render" in text
+    _f12(os.path.join(helpers.tmp_dir(), "f12.exr"))
+    rate = estimates.last_render_rate()
+    assert rate and rate > 0
+    text, warn = estimates.render_time_text(1920, 1080, 100, 8)
+    assert f"{rate / 1e6:.2f} M rays/s" in text and "132.7 M rays" in text
+    assert warn == (1920 * 1080 * 64 / rate > estimates.RENDER_WARNING_SECONDS)
+    # The bake estimate takes the storage's bytes a texel from the native core.
+    full = _native().probe_storage("full")["bytes_per_texel"]
+    compact = _native().probe_storage("compact")["bytes_per_texel"]
+    assert (full, compact) == (18, 7)
+    g = grid.lfprobe_grid
+    text, _warn = estimates.bake_memory_text(tuple(g.counts), g.resolution, full, "full")
+    probes = g.counts[0] * g.counts[1] * g.counts[2]
+    assert f"{probes} probes at {g.resolution}²" in text

@@ -19,6 +19,7 @@ import traceback
 import bpy
 import numpy as np
 
+from ...core import estimates
 from ...core.colour import srgb_display_rgba
 from ...core.errors import InputError
 from .. import probe_view
@@ -114,6 +115,7 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
                 return None
             self.update_progress(job.fraction)
         image, stats = job.result()
+        estimates.record_render_rate(stats["rays_per_second"])  # the next F12's time estimate
         pixels = max(int(stats["hits"] + stats["misses"] + stats["unknown"]), 1)
         self.update_stats("", f"Light Field Probes: {stats['seconds'] * 1000:.0f} ms, "
                               f"{stats['rays_per_second'] / 1e6:.2f} M rays/s, HIT {100 * stats['hits'] / pixels:.1f}%")

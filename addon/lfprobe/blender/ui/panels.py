@@ -9,7 +9,7 @@ import textwrap
 
 import bpy
 
-from ...core import native, probe_storage
+from ...core import estimates, native, probe_storage
 from .. import grid as grid_module
 from ..operators import place_views
 
@@ -152,6 +152,23 @@ class LFPROBE_PT_grid(_GridPanel, bpy.types.Panel):
                 layout.label(text="The counts changed since the bake: bake again", icon="INFO")
         else:
             layout.label(text="Not baked")
+        _draw_bake_estimate(layout, grid)
+
+
+def _draw_bake_estimate(layout, grid) -> None:
+    """What the next Bake will hold in memory, with a warning when that is a lot."""
+    storage, distance_step = grid.storage_choice()
+    try:
+        bytes_per_texel = int(native.load().probe_storage(storage, distance_step=distance_step)["bytes_per_texel"])
+    except native.NativeModuleError:
+        return
+    text, warn = estimates.bake_memory_text(tuple(grid.counts), int(grid.resolution), bytes_per_texel, storage)
+    if grid.plan_from_data:
+        text += "; Plan From Data may use less"
+    for n, line in enumerate(textwrap.wrap(text, 70)):
+        layout.label(text=line, icon=("ERROR" if warn else "INFO") if n == 0 else "NONE")
+    if warn:
+        layout.label(text="Fewer probes, a lower Resolution or Compact storage would use less")
 
 
 class LFPROBE_PT_grid_views(_GridPanel, bpy.types.Panel):

@@ -2,8 +2,11 @@
 
 from __future__ import annotations
 
+import textwrap
+
 import bpy
 
+from ...core import estimates
 from .. import grid as grid_module
 from ..engine.render_engine import LFProbeRenderEngine
 
@@ -34,3 +37,10 @@ class RENDER_PT_lfprobe_trace(bpy.types.Panel):
         layout.prop(settings, "radiance_filter")
         layout.prop(settings, "blend")
         layout.prop(settings, "threads")
+        render = context.scene.render
+        text, warn = estimates.render_time_text(render.resolution_x, render.resolution_y,
+                                                render.resolution_percentage, settings.samples)
+        for n, line in enumerate(textwrap.wrap(text, 70)):
+            layout.label(text=line, icon=("ERROR" if warn else "INFO") if n == 0 else "NONE")
+        if warn:
+            layout.label(text="Lower the resolution % or Pixel Samples for a quicker preview")
