@@ -168,6 +168,18 @@ def test_import_sets_up_a_grid_that_bakes_and_compares_by_collection():
     assert result.returncode == 0, result.stdout + result.stderr
     _check(result, "PSNR")
 
+    # Without --counts the batch import fits the grid as Fit Grid does in the UI, with the same
+    # defaults: the box room (4 × 3 × 2.5 m) less 0.25 m, probes at most 1 m apart.
+    defaults = probe_scene.run_batch(blend, "import", "--scan", scan, "--resolution", "32",
+                                     "--save-as", os.path.join(folder, "defaults.blend"))
+    assert defaults.returncode == 0, defaults.stdout + defaults.stderr
+    _check(defaults, "5×4×3 probes at 32²")
+    bpy.ops.wm.open_mainfile(filepath=blend)
+    helpers.import_scans(scan)
+    bpy.ops.object.lfprobe_grid_add()
+    assert bpy.ops.object.lfprobe_grid_fit() == {"FINISHED"}
+    assert tuple(bpy.context.view_layer.objects.active.lfprobe_grid.counts) == (5, 4, 3)
+
     fitted = os.path.join(folder, "fitted.blend")
     result = probe_scene.run_batch(blend, "import", "--scan", scan, "--counts", "2", "2", "1",
                                    "--resolution", "32", "--save-as", fitted)

@@ -9,6 +9,12 @@ from typing import Sequence, Tuple
 import numpy as np
 
 
+# Fit Grid's defaults, shared by the operator and the batch import so that both choose the same
+# grid for the same scans: probes a quarter metre inside the cloud's bounds, at most a metre apart.
+FIT_MARGIN = 0.25
+FIT_SPACING = 1.0
+
+
 def fitted_box(points, margin: float) -> Tuple[np.ndarray, np.ndarray]:
     """(low, high) of the box `margin` inside the bounds of the points (k, 3), e.g. a cloud's
     transformed bounding-box corners; an axis where the margin exceeds half the bounds

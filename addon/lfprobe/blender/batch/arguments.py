@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ...core.grid_fit import FIT_MARGIN, FIT_SPACING
 from . import commands
 
 
@@ -35,8 +36,11 @@ def build_parser() -> argparse.ArgumentParser:
     imp.add_argument("--counts", nargs=3, type=int, metavar=("NX", "NY", "NZ"))
     imp.add_argument("--resolution", type=int, default=0, help="probe map resolution (default: the grid's)")
     imp.add_argument("--plan", action="store_true", help="Plan From Data: per-probe resolution, moves, drops")
-    imp.add_argument("--margin", type=float, default=0.25, help="new grid: metres inside the scans' bounds")
-    imp.add_argument("--spacing", type=float, default=0.0, help="new grid: largest probe spacing (0: keep counts)")
+    imp.add_argument("--margin", type=float, default=FIT_MARGIN,
+                     help=f"new grid: metres inside the scans' bounds (default {FIT_MARGIN}, as Fit Grid)")
+    imp.add_argument("--spacing", type=float, default=FIT_SPACING,
+                     help=f"new grid: largest probe spacing (default {FIT_SPACING} m, as Fit Grid; 0: keep the "
+                          "new grid's counts, 2×2×2)"),
     imp.add_argument("--save-as", metavar="FILE.blend", help="save here (default: over the opened .blend)")
     imp.set_defaults(run=commands.run_import)
 

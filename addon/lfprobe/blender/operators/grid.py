@@ -5,7 +5,7 @@ import bpy
 from bpy.props import FloatProperty, IntProperty
 from mathutils import Vector
 
-from ...core.grid_fit import box_location_and_scale, counts_for_spacing, fitted_box
+from ...core.grid_fit import FIT_MARGIN, FIT_SPACING, box_location_and_scale, counts_for_spacing, fitted_box
 from ..grid import is_grid, new_grid_id
 from .menu_registration import classes_with_menu_entry
 
@@ -54,14 +54,14 @@ class LFPROBE_OT_grid_fit(bpy.types.Operator):
         name="Margin",
         description="Keep the probes this far inside the cloud's bounds (walls are not good probe places)",
         min=0.0,
-        default=0.25,
+        default=FIT_MARGIN,
         unit="LENGTH",
     )
     spacing: FloatProperty(
         name="Spacing",
         description="Largest distance between neighbouring probes (0 keeps the counts)",
         min=0.0,
-        default=1.0,
+        default=FIT_SPACING,
         unit="LENGTH",
     )
 
