@@ -86,18 +86,31 @@ public:
 
     // Runs the job to its end from Python: polls every 0.1 s, calls `callback(fraction, stage)`
     // (when not None) and stops the work when the callback returns False or raises, or when
-    // Ctrl-C arrives; the callback's exception (or KeyboardInterrupt) is then re-raised.
+    // Ctrl-C arrives; the callback's exception (or KeyboardInterrupt) is then re-raised. A
+    // Ctrl-C that comes when the work can no longer stop (it finished: its output is written,
+    // renamed into place) is not a cancel: the result is returned, as if it came a moment later.
     py::object run(const py::object& callback) {
         while (!wait(0.1)) {
             if (PyErr_CheckSignals() != 0) {
                 cancel();
                 wait(-1.0);
+                if (finished_anyway()) {
+                    PyErr_Clear();
+                    break;
+                }
                 throw py::error_already_set();
             }
             if (!callback.is_none()) {
                 py::object answer;
                 try {
                     answer = callback(progress_.fraction(), progress_.stage());
+                } catch (py::error_already_set& error) {
+                    cancel();
+                    wait(-1.0);
+                    if (error.matches(PyExc_KeyboardInterrupt) && finished_anyway()) {
+                        break;
+                    }
+                    throw;
                 } catch (...) {
                     cancel();
                     wait(-1.0);
@@ -109,12 +122,24 @@ public:
             }
         }
         if (!callback.is_none()) {
-            callback(1.0, std::string("done"));
+            try {
+                callback(1.0, std::string("done"));
+            } catch (py::error_already_set& error) {
+                if (!error.matches(PyExc_KeyboardInterrupt)) {
+                    throw;
+                }
+            }
         }
         return result();
     }
 
 private:
+    // After a cancel: true when the work had already ended without error (too late to stop).
+    bool finished_anyway() {
+        std::lock_guard lock(mutex_);
+        return done_ && !error_;
+    }
+
     Progress progress_;
     std::function<py::object()> take_;
     std::thread thread_;
