@@ -7,6 +7,7 @@ import subprocess
 import time
 
 import numpy as np
+import pytest
 
 from conftest import ROOT, run_cli
 
@@ -138,3 +139,39 @@ def test_killed_rebake_leaves_the_earlier_set_as_it_was(native, tmp_path):
             "--quiet", check=True)
     assert not staging.exists()
     assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "probe_00000.exr"]
+
+
+@pytest.mark.parametrize("moment", ["staging opened", "writing probes"])
+def test_interrupted_rebake_leaves_the_earlier_set_bit_for_bit(native, tmp_path, moment):
+    """Ctrl-C (SIGINT) at two moments of a bake over an earlier set, as soon as its staging
+    folder exists (the first probe baking) and after some probes were written: exit 130, the
+    earlier set as it was, no staging folder or temporary left, and the next bake succeeds."""
+    scan = tmp_path / "room.xyz"
+    g = np.arange(-2, 2, 0.01)
+    yy, zz = np.meshgrid(g, g)
+    wall = np.column_stack([np.full(yy.size, 3.0), yy.ravel(), zz.ravel() + 1])
+    np.savetxt(scan, np.column_stack([wall, np.full((yy.size, 3), 128)]), fmt="%.3f")
+    out = tmp_path / "set"
+    run_cli("bake", "--scan", scan, "--probe", 0, 0, 1, "--res", 16, "--out", out, "--no-cache",
+            "--quiet", check=True)
+    earlier = {p.name: p.read_bytes() for p in out.iterdir()}
+    staging = tmp_path / "set.partial"
+    probes = [v for i in range(60) for v in (0.01 * i, 0, 1)]
+    process = subprocess.Popen(
+        [os.path.join(ROOT, "lfprobe"), "bake", "--scan", str(scan), "--probe", *map(str, probes),
+         "--res", "512", "--out", str(out), "--no-cache", "--quiet"],
+        stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    waited_for = staging if moment == "staging opened" else staging / "probe_00002.exr"
+    while not waited_for.exists() and time.time() < deadline:
+        time.sleep(0.005)
+    process.send_signal(signal.SIGINT)
+    _, stderr = process.communicate(timeout=120)
+    assert process.returncode == 130, stderr
+    assert "cancelled" in stderr
+    assert {p.name: p.read_bytes() for p in out.iterdir()} == earlier
+    assert not staging.exists()
+    assert not [p for p in tmp_path.iterdir() if ".tmp." in p.name]
+    run_cli("bake", "--scan", scan, "--probe", 0, 0, 1, 0.5, 0, 1, "--res", 16, "--out", out,
+            "--no-cache", "--quiet", check=True)
+    assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "probe_00000.exr", "probe_00001.exr"]
