@@ -77,7 +77,7 @@ PlanSettings plan_settings_from(const py::dict& options) {
                 "max_resolution, footprint, quantile, samples_per_spacing, classify, clearance, "
                 "cell_reach, max_move, partly_unknown, min_coverage_gain, drop, "
                 "classify_resolution, splat_scale, splat_plane_reach, "
-                "hole_fill_texels, lod_texels)");
+                "hole_fill_texels, lod_texels, splat_edge_margin)");
         }
     }
     return s;

@@ -183,3 +183,19 @@ def test_plan_from_data_sizes_moves_and_shows_the_probes():
             np.testing.assert_allclose(colour, grid_overlay.DROPPED_COLOUR, atol=1e-6)
         elif planned["moved"]:
             np.testing.assert_allclose(colour, grid_overlay.MOVED_COLOUR, atol=1e-6)
+
+
+def test_estimate_coverage_before_baking_writes_nothing():
+    folder = _saved_scene()
+    _scan, grid_obj, _ = _box_room_grid(counts=(2, 2, 1))
+    assert bpy.ops.object.lfprobe_grid_estimate() == {"FINISHED"}
+    estimate = grid_obj.lfprobe_grid.estimate()
+    assert estimate["probes"] == 4 and estimate["counts"] == [2, 2, 1]
+    assert len(estimate["unknown"]) == 4
+    assert estimate["mean_unknown"] < 0.1, estimate  # inside a closed room scanned all round
+    assert estimate["mostly_unknown"] == 0
+    assert not any(name.endswith("_probes") for name in os.listdir(folder))
+    # Moved out of the room, the probes see its walls from behind, which no scan saw.
+    grid_obj.location.x += 10.0
+    assert bpy.ops.object.lfprobe_grid_estimate() == {"FINISHED"}
+    assert grid_obj.lfprobe_grid.estimate()["mean_unknown"] > 0.5

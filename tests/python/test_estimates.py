@@ -24,3 +24,13 @@ def test_render_time_needs_a_measured_rate_and_warns_when_long():
     assert "about 0 s" in text and not warn
     estimates.record_render_rate(1e6)
     assert estimates.last_render_rate() == 1e6
+
+
+def test_coverage_estimate_from_the_plan():
+    planned = [{"classification": {"unknown": u}} for u in (0.1, 0.3, 0.9, 0.7)]
+    estimate = estimates.coverage_estimate(planned)
+    assert estimate == {"probes": 4, "mean_unknown": 0.5, "worst_unknown": 0.9, "mostly_unknown": 2}
+    text, warn = estimates.coverage_estimate_text(estimate)
+    assert "50% of directions unknown" in text and "2 of 4 probes mostly unknown" in text and not warn
+    _, warn = estimates.coverage_estimate_text(estimates.coverage_estimate(planned[2:]))
+    assert warn

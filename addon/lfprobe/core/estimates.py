@@ -43,6 +43,31 @@ def bake_memory_text(counts: Sequence[int], resolution: int, bytes_per_texel: in
     return text, total > MEMORY_WARNING_BYTES
 
 
+# A probe that would not know more than half of its directions.
+MOSTLY_UNKNOWN = 0.5
+# Above this mean unknown fraction the grid panel warns before Bake.
+UNKNOWN_WARNING = 0.5
+
+
+def coverage_estimate(planned: Sequence[dict]) -> dict:
+    """The grid panel's coverage estimate from plan_probes' probes (their classification's
+    unknown fraction, from a coarse bake at each probe): mean, worst, and how many probes would
+    know less than half of their directions."""
+    unknown = [float(p.get("classification", {}).get("unknown", 1.0)) for p in planned]
+    if not unknown:
+        return {"probes": 0, "mean_unknown": 1.0, "worst_unknown": 1.0, "mostly_unknown": 0}
+    return {"probes": len(unknown), "mean_unknown": sum(unknown) / len(unknown),
+            "worst_unknown": max(unknown),
+            "mostly_unknown": sum(1 for u in unknown if u > MOSTLY_UNKNOWN)}
+
+
+def coverage_estimate_text(estimate: dict) -> tuple:
+    """(text, warn) for the grid panel."""
+    text = (f"Estimate: {100 * estimate['mean_unknown']:.0f}% of directions unknown on average, "
+            f"{estimate['mostly_unknown']} of {estimate['probes']} probes mostly unknown")
+    return text, estimate["mean_unknown"] > UNKNOWN_WARNING
+
+
 def render_rays(width: int, height: int, percentage: int, samples: int) -> int:
     """Rays an F12 render traces: pixels at the resolution percentage, samples² each."""
     w = max(1, int(width) * int(percentage) // 100)

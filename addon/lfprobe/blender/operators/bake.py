@@ -13,7 +13,7 @@ import shutil
 import bpy
 from bpy.props import StringProperty
 
-from ...core import cluster_bake, native, pipeline
+from ...core import cluster_bake, estimates, native, pipeline
 from ...core.atomic_write import replace_folder
 from ...core.cloud_transform import to_world, transform_scans
 from ...core.errors import InputError
@@ -357,7 +357,73 @@ class LFPROBE_OT_grid_apply_storage(bpy.types.Operator):
         return {"FINISHED"}
 
 
-_CLASSES = (LFPROBE_OT_bake, LFPROBE_OT_grid_apply_storage)
+class LFPROBE_OT_grid_estimate(NativeJobOperator, bpy.types.Operator):
+    """Estimate how much of each probe's surroundings the grid's scans cover, before baking: a
+    coarse bake at every probe (the classification of Plan From Data), nothing written"""
+
+    bl_idname = "object.lfprobe_grid_estimate"
+    bl_label = "Estimate Coverage"
+    bl_options = {"REGISTER"}
+    job_label = "Estimating coverage"
+
+    grid: StringProperty(name="Grid", description="Name of the grid object (empty: the active object)", default="")
+
+    @classmethod
+    def poll(cls, context):
+        return not grid_job_running() and cls.job_label not in job_modal.running_labels
+
+    def execute(self, context):
+        return self.run_job(context)
+
+    def start_job(self, context):
+        try:
+            native.load()
+            grid_obj = grid_object(context, self.grid)
+            low, high = grid_module.grid_box(grid_obj)
+            scans, meshes = gather_sources(grid_obj)
+            if meshes:
+                raise BakeInputError(f"grid {grid_obj.name!r}: Estimate Coverage works from scan clouds; "
+                                     "a mesh is exact where it has geometry")
+            offset = tuple(float(v) for v in shared_scan_offset(scans) or (0.0, 0.0, 0.0))
+        except (InputError, native.NativeModuleError) as error:
+            self.report({"ERROR"}, f"Estimate coverage: {error}")
+            return None
+        grid = grid_obj.lfprobe_grid
+        self._grid_name, self._counts, self._resolution = grid_obj.name, list(grid.counts), int(grid.resolution)
+        placement = pipeline.ProbePlacementSpec(grid_min=to_world(low, offset), grid_max=to_world(high, offset),
+                                                counts=list(grid.counts))
+        paths = [p for obj in scans for p in obj.lfprobe_scan.paths()]
+        scanners = [s for obj in scans for s in obj.lfprobe_scan.scanners()]
+        if len(scanners) != len(paths) or any(s is None for s in scanners):
+            scanners = []
+        matrices = [[list(row) for row in obj.matrix_world] for obj in scans for _ in obj.lfprobe_scan.paths()]
+        # Classification only: every probe where the grid puts it, none moved or dropped.
+        options = {"classify": True, "max_move": 0.0, "drop": False, "auto_resolution": False,
+                   "resolution": self._resolution}
+
+        def work(report):
+            cloud, records = pipeline.load_scans_and_sources(paths, scanners, world_offset=list(offset),
+                                                             cache_dir=default_cache_dir(), progress=report)
+            files = file_of_each_scan(records, paths)
+            cloud = transform_scans(cloud, [matrices[f] for f in files])
+            return pipeline.plan_probes(cloud, placement, options, progress=report)
+
+        return ThreadJob(work, name="lfprobe coverage estimate")
+
+    def finish_job(self, context, result):
+        grid_obj = bpy.data.objects.get(self._grid_name)
+        if grid_obj is None:
+            return {"CANCELLED"}
+        estimate = estimates.coverage_estimate(result)
+        estimate.update(counts=self._counts, resolution=self._resolution,
+                        unknown=[float(p.get("classification", {}).get("unknown", 1.0)) for p in result])
+        grid_obj.lfprobe_grid.estimate_json = json.dumps(estimate)
+        text, _warn = estimates.coverage_estimate_text(estimate)
+        self.report({"INFO"}, f"Grid {grid_obj.name!r}: {text}")
+        return {"FINISHED"}
+
+
+_CLASSES = (LFPROBE_OT_bake, LFPROBE_OT_grid_apply_storage, LFPROBE_OT_grid_estimate)
 
 
 # Blender's own helper: registers in order, unregisters in reverse.

@@ -208,6 +208,12 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
         "a duplicate gets its own when it is baked",
         default="",
     )
+    estimate_json: StringProperty(
+        name="Coverage Estimate",
+        description="Estimate Coverage's result: the counts and resolution it was made for and each "
+        "probe's unknown fraction from a coarse bake (JSON)",
+        default="{}",
+    )
     coverage_json: StringProperty(
         name="Coverage",
         description="Per-probe coverage after baking (JSON list of {surface, inferred, empty, unknown})",
@@ -230,6 +236,13 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
     def placement(self) -> dict:
         try:
             value = json.loads(self.placement_json or "{}")
+        except ValueError:
+            return {}
+        return value if isinstance(value, dict) else {}
+
+    def estimate(self) -> dict:
+        try:
+            value = json.loads(self.estimate_json or "{}")
         except ValueError:
             return {}
         return value if isinstance(value, dict) else {}

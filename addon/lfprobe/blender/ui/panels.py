@@ -169,6 +169,14 @@ def _draw_bake_estimate(layout, grid) -> None:
         layout.label(text=line, icon=("ERROR" if warn else "INFO") if n == 0 else "NONE")
     if warn:
         layout.label(text="Fewer probes, a lower Resolution or Compact storage would use less")
+    estimate = grid.estimate()
+    if estimate.get("counts") == list(grid.counts) and estimate.get("probes"):
+        text, warn = estimates.coverage_estimate_text(estimate)
+        for n, line in enumerate(textwrap.wrap(text, 70)):
+            layout.label(text=line, icon=("ERROR" if warn else "INFO") if n == 0 else "NONE")
+        if warn:
+            layout.label(text="Probes far from every scanner see little: fewer probes, nearer the stations")
+    layout.operator("object.lfprobe_grid_estimate", icon="VIEWZOOM").grid = grid.id_data.name
 
 
 class LFPROBE_PT_grid_views(_GridPanel, bpy.types.Panel):
