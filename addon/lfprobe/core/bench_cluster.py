@@ -121,10 +121,13 @@ def main(args) -> int:
               f"{bake_time / 60:.1f} min baking + {prepare_time / 60:.1f} min preparing its cloud + "
               f"{per_worker * per_task:.1f} s of scheduling: {total / 60:.1f} min in all, against "
               f"{PROBES * probe_seconds / cores / 3600:.1f} h for one such machine")
-        memory_per_point = c["peak_memory_per_worker"] / points  # the whole process, at this size
-        print(f"  memory a worker: about {task_points * memory_per_point / 2**30:.1f} GiB for its "
-              f"{task_points:,} points at this run's {memory_per_point:.0f} bytes a point (peak of the "
-              "worker process: cloud, normals, hierarchy, one probe's maps, the interpreter)")
+        base = c["base_memory_per_worker"]
+        memory_per_point = c["cloud_memory_per_worker"] / points
+        print(f"  memory a worker: about {(base + task_points * memory_per_point) / 2**30:.1f} GiB for "
+              f"its {task_points:,} points: {base / 2**20:.0f} MiB before the cloud (the interpreter, "
+              f"Dask, lfprobe) and this run's {memory_per_point:.0f} bytes a point for the cloud ready to "
+              f"bake (points, normals, spacing, hierarchy), measured as the worker's own memory; the probe "
+              f"being baked comes on top ({res}² here)")
         print(f"  not built: loading only the stations a task sees; today each worker loads the whole "
               f"cloud, {STATIONS * POINTS_PER_STATION * bytes_per_point / 2**40:.2f} TiB for this building")
         results["cluster"] = {
@@ -134,6 +137,8 @@ def main(args) -> int:
             "bytes_read_per_worker": c["bytes_read_per_worker"],
             "prepare_seconds_per_worker": c["prepare_seconds_per_worker"],
             "peak_memory_per_worker": c["peak_memory_per_worker"],
+            "base_memory_per_worker": c["base_memory_per_worker"],
+            "cloud_memory_per_worker": c["cloud_memory_per_worker"],
             "worker_seconds_per_probe": c["seconds_per_probe"],
             "scheduler_seconds_per_task": per_task,
             "paper": {"stations": STATIONS, "points_per_station": POINTS_PER_STATION, "probes": PROBES,

@@ -103,6 +103,7 @@ def bake_probe_batch(spec_fields: dict, positions: list, indices: list, staging:
     spec = CloudSpec(**spec_fields)
     started = time.perf_counter()
     fresh = spec not in _prepared
+    before = _private_memory_bytes()
     source = _prepared_source(spec)
     prepared = time.perf_counter()
     job = native.load().start_bake_staged_probes(source, positions, list(indices), staging)
@@ -116,9 +117,29 @@ def bake_probe_batch(spec_fields: dict, positions: list, indices: list, staging:
         "hierarchy_seconds": source.hierarchy_seconds if fresh else 0.0,
         "bake_seconds": time.perf_counter() - prepared,
         "bytes_read": _bytes_read(spec) if fresh else 0,
-        # The worker process's peak resident memory so far (Linux reports KiB).
-        "peak_memory_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,
+        "peak_memory_bytes": _peak_memory_bytes(),
+        # The memory the worker owns itself (not shared with other processes) before it loaded
+        # this cloud (the interpreter, Dask, lfprobe) and after it (the cloud ready to bake).
+        "base_memory_bytes": before if fresh else 0,
+        "cloud_memory_bytes": (_private_memory_bytes() - before) if fresh else 0,
     }
+
+
+def _peak_memory_bytes() -> int:
+    """This process's peak resident memory so far (Linux reports KiB). A worker forked from a
+    large process counts the pages it shares with it too."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def _private_memory_bytes() -> int:
+    """The resident memory this process does not share (Linux: /proc/self/smaps_rollup); 0 where
+    that cannot be read."""
+    try:
+        with open("/proc/self/smaps_rollup", encoding="ascii") as stream:
+            fields = dict(line.split(":", 1) for line in stream if ":" in line)
+        return sum(int(fields[k].split()[0]) * 1024 for k in ("Private_Clean", "Private_Dirty"))
+    except (OSError, KeyError, ValueError):
+        return 0
 
 
 def _bytes_read(spec: CloudSpec) -> int:
@@ -341,6 +362,8 @@ def _figures(results: list, probes: int, tasks: int, tasks_seconds: float, clust
             "prepare_seconds_per_worker": (sum(prepare) / len(prepare)) if prepare else 0.0,
             "bytes_read_per_worker": max([r["bytes_read"] for r in results] or [0]),
             "peak_memory_per_worker": max([r["peak_memory_bytes"] for r in results] or [0]),
+            "base_memory_per_worker": max([r["base_memory_bytes"] for r in results] or [0]),
+            "cloud_memory_per_worker": max([r["cloud_memory_bytes"] for r in results] or [0]),
             "overhead_seconds_per_task": overhead,
         },
     }
