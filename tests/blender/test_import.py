@@ -177,3 +177,21 @@ def test_points_render_in_cycles_with_their_colours():
     centre = pixels[10:14, 10:14, :3].reshape(-1, 3).mean(axis=0)
     # The wall x = −2 around (y, z) = (0, 1.25): colour (0, 120, 125) in 8-bit sRGB.
     np.testing.assert_allclose(centre * 255, [0, 120, 125], atol=8)
+
+
+def test_the_preferences_choose_the_scan_cache():
+    """The add-on's preferences hold the parse cache's folder; imports and bakes read through it
+    (as an extension its default is the extension's user folder)."""
+    preferences = helpers.addon("blender.preferences")
+    prefs = bpy.context.preferences.addons[preferences.ADDON_PACKAGE].preferences
+    default = preferences.scan_cache_dir()
+    if helpers.uses_extensions():
+        assert "lfprobe" in default and os.path.isdir(default)
+    cache = os.path.join(helpers.tmp_dir(), "scan cache")
+    prefs.cache_folder = cache
+    assert preferences.scan_cache_dir() == cache
+    path = os.path.join(helpers.tmp_dir(), "room.xyz")
+    helpers.write_box_room_xyz(path, pitch=0.1)
+    helpers.import_scans(path)
+    assert os.listdir(cache), "the import wrote its parse-cache entry into the chosen folder"
+    prefs.cache_folder = ""

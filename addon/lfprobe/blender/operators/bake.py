@@ -21,7 +21,6 @@ from ...core import probe_storage
 from ...core.probe_set import read_manifest, record_in_bake
 from ...core.scan_formats import is_library_format
 from ...core.scan_merge import describe_records, file_of_each_scan, loaded_with_records
-from ...core.sources import default_cache_dir
 from .. import grid as grid_module
 from .. import preferences
 from .. import scan_object
@@ -135,6 +134,8 @@ class GridBake:
             # The grid's resolution is the largest a planned probe may get.
             self.options.plan = {"auto_resolution": True, "max_resolution": int(grid.resolution),
                                  "min_resolution": min(64, int(grid.resolution))}
+        # Read on the main thread: the jobs' threads must not touch bpy.
+        self.cache_dir = preferences.scan_cache_dir(context)
         self.paths = [p for obj in self.scans for p in obj.lfprobe_scan.paths()]
         self.scanners = [s for obj in self.scans for s in obj.lfprobe_scan.scanners()]
         # Each file's transform: the matrix of the scan object it belongs to.
@@ -145,16 +146,17 @@ class GridBake:
         """The job that reads the scans' full clouds: the native one (through the parse cache),
         or, with E57 or LAS/LAZ files among them, core's loader on a thread of its own."""
         # Scanner positions travel with the files (headers, E57 poses) or were given at import.
+        cache = self.cache_dir
         if any(is_library_format(p) for p in self.paths):
             paths, scanners, offset = list(self.paths), list(self.scanners), list(self.offset)
             if len(scanners) != len(paths):
                 scanners = []
             return ThreadJob(lambda report: pipeline.load_scans_and_sources(
-                paths, scanners, world_offset=offset, cache_dir=default_cache_dir(), progress=report))
+                paths, scanners, world_offset=offset, cache_dir=cache, progress=report))
         given = (self.scanners if len(self.scanners) == len(self.paths) and all(s is not None for s in self.scanners)
                  else [])
         return native.load().start_load_scans(
-            self.paths, scanners=given, world_offset=list(self.offset), cache_dir=default_cache_dir()
+            self.paths, scanners=given, world_offset=list(self.offset), cache_dir=cache
         )
 
     def start_cluster_bake(self, out_dir: str, scheduler: str):
@@ -164,9 +166,9 @@ class GridBake:
         paths, scanners, offset = list(self.paths), list(self.scanners), list(self.offset)
         if len(scanners) != len(paths) or any(s is None for s in scanners):
             scanners = []
-        matrices, placement, options = list(self.file_matrices), self.placement, self.options
+        matrices, placement, options, cache = list(self.file_matrices), self.placement, self.options, self.cache_dir
         return ThreadJob(lambda report: cluster_bake.bake_scans_on_cluster(
-            paths, out_dir, placement, options, scanners=scanners, cache_dir=default_cache_dir(),
+            paths, out_dir, placement, options, scanners=scanners, cache_dir=cache,
             world_offset=offset, file_matrices=matrices, scheduler=scheduler, progress=report))
 
     def cloud_and_sources(self, loaded):
@@ -397,13 +399,14 @@ class LFPROBE_OT_grid_estimate(NativeJobOperator, bpy.types.Operator):
         if len(scanners) != len(paths) or any(s is None for s in scanners):
             scanners = []
         matrices = [[list(row) for row in obj.matrix_world] for obj in scans for _ in obj.lfprobe_scan.paths()]
+        cache = preferences.scan_cache_dir(context)  # read here: the job's thread must not touch bpy
         # Classification only: every probe where the grid puts it, none moved or dropped.
         options = {"classify": True, "max_move": 0.0, "drop": False, "auto_resolution": False,
                    "resolution": self._resolution}
 
         def work(report):
             cloud, records = pipeline.load_scans_and_sources(paths, scanners, world_offset=list(offset),
-                                                             cache_dir=default_cache_dir(), progress=report)
+                                                             cache_dir=cache, progress=report)
             files = file_of_each_scan(records, paths)
             cloud = transform_scans(cloud, [matrices[f] for f in files])
             return pipeline.plan_probes(cloud, placement, options, progress=report)

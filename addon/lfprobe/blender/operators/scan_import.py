@@ -14,7 +14,7 @@ from ...core import native, pipeline
 from ...core.scan_formats import ALL_EXTENSIONS, is_library_format
 from ...core.scan_merge import file_of_each_scan, loaded_with_records
 from ...core.scan_points import automatic_point_radius, file_of_each_point, file_scanners, in_shared_frame, object_groups, object_points
-from ...core.sources import default_cache_dir
+from .. import preferences
 from .. import scan_object
 from .job_modal import NativeJobOperator, ThreadJob
 from .menu_registration import classes_with_menu_entry
@@ -91,11 +91,12 @@ class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator
             self.report({"ERROR"}, str(error))
             return None
         self._import_paths = paths
+        cache = preferences.scan_cache_dir(context)  # read here: the job's thread must not touch bpy
         if any(is_library_format(p) for p in paths):
             columns = self.columns
             return ThreadJob(lambda report: pipeline.load_scans_and_sources(
-                paths, columns=columns, cache_dir=default_cache_dir(), progress=report))
-        return _native.start_load_scans(paths, columns=self.columns, cache_dir=default_cache_dir())
+                paths, columns=columns, cache_dir=cache, progress=report))
+        return _native.start_load_scans(paths, columns=self.columns, cache_dir=cache)
 
     def finish_job(self, context, loaded):
         paths = self._import_paths
