@@ -195,3 +195,25 @@ def test_the_preferences_choose_the_scan_cache():
     helpers.import_scans(path)
     assert os.listdir(cache), "the import wrote its parse-cache entry into the chosen folder"
     prefs.cache_folder = ""
+
+
+def test_import_has_presets_and_takes_dropped_files():
+    """The import keeps operator presets; in Blender 4.1+ a FileHandler imports scan files
+    dropped on the viewport (Blender hands the operator `directory` and `files`)."""
+    operator = bpy.ops.import_scene.lfprobe_scan.get_rna_type()
+    assert "PRESET" in bpy.types.IMPORT_SCENE_OT_lfprobe_scan.bl_options
+    assert operator is not None
+    if bpy.app.version < (4, 1, 0):
+        assert not hasattr(bpy.types, "FileHandler")
+        return
+    handler = getattr(bpy.types, "LFPROBE_FH_scan", None)
+    assert handler is not None, "the FileHandler is registered"
+    assert handler.bl_import_operator == "import_scene.lfprobe_scan"
+    assert {".xyz", ".pts", ".ply", ".e57", ".las", ".laz"} <= set(handler.bl_file_extensions.split(";"))
+    # What a drop does: the operator invoked with the dropped files runs without a browser.
+    folder = helpers.tmp_dir()
+    helpers.write_box_room_xyz(os.path.join(folder, "dropped.xyz"), pitch=0.1)
+    result = bpy.ops.import_scene.lfprobe_scan("INVOKE_DEFAULT", directory=folder,
+                                               files=[{"name": "dropped.xyz"}])
+    assert result in ({"FINISHED"}, {"RUNNING_MODAL"}), result
+    assert "dropped" in bpy.data.objects

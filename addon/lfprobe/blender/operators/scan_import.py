@@ -31,7 +31,8 @@ class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator
 
     bl_idname = "import_scene.lfprobe_scan"
     bl_label = "Import Scan Cloud"
-    bl_options = {"REGISTER", "UNDO"}
+    # PRESET: the file browser's preset menu keeps a user's Columns, Display Limit and the rest.
+    bl_options = {"REGISTER", "UNDO", "PRESET"}
     job_label = "Scan import"
 
     filename_ext = ".xyz"
@@ -60,6 +61,12 @@ class LFPROBE_OT_import_scan(NativeJobOperator, ImportHelper, bpy.types.Operator
         description='Column names of text scans, e.g. "x y z i r g b" (empty: from the header or the count)',
         default="",
     )
+
+    def invoke(self, context, event):
+        if self.directory and len(self.files) > 0:
+            # Files dropped on the viewport (the FileHandler below): no file browser.
+            return self.execute(context)
+        return ImportHelper.invoke(self, context, event)
 
     def _paths(self) -> list:
         names = [f.name for f in self.files if f.name]
@@ -157,4 +164,22 @@ def _menu_import(self, _context):
     self.layout.operator(LFPROBE_OT_import_scan.bl_idname, text="Scan Cloud (.xyz, .pts, .ply, .e57, .las)")
 
 
-register, unregister = classes_with_menu_entry((LFPROBE_OT_import_scan,), "TOPBAR_MT_file_import", _menu_import)
+_CLASSES = [LFPROBE_OT_import_scan]
+
+if hasattr(bpy.types, "FileHandler"):  # Blender 4.1+: drag and drop
+
+    class LFPROBE_FH_scan(bpy.types.FileHandler):
+        """Scan files dropped on the 3D viewport or the outliner are imported as scan clouds"""
+
+        bl_idname = "LFPROBE_FH_scan"
+        bl_label = "Scan Cloud"
+        bl_import_operator = LFPROBE_OT_import_scan.bl_idname
+        bl_file_extensions = ";".join(ALL_EXTENSIONS)
+
+        @classmethod
+        def poll_drop(cls, context):
+            return context.area is not None and context.area.type in {"VIEW_3D", "OUTLINER"}
+
+    _CLASSES.append(LFPROBE_FH_scan)
+
+register, unregister = classes_with_menu_entry(tuple(_CLASSES), "TOPBAR_MT_file_import", _menu_import)
