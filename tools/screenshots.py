@@ -128,6 +128,10 @@ def _step_panels(scan, grid):
         bpy.ops.view3d.view_all()
     properties = _area("PROPERTIES")
     properties.spaces.active.context = "OBJECT"
+    # The grid's panel sits below Transform and the others: scroll down to it.
+    with _override(properties):
+        for _ in range(6):
+            bpy.ops.view2d.scroll_down(page=True)
 
 
 def _step_scan_panel(scan):

@@ -68,6 +68,8 @@ def test_viewport_draws_the_display_points_in_srgb():
     np.testing.assert_allclose(colours[0, :3] * 255, _first_data_line(path)[3:6], atol=0.01)
     assert np.abs(colours[:, :3] * 255 - np.round(colours[:, :3] * 255)).max() < 0.01
     assert colours.shape == (PUMP_POINTS, 4) and np.all(colours[:, 3] == 1.0)
+    # Blender itself draws only the bounds: its black loose-vertex dots would cover the colours.
+    assert obj.display_type == "BOUNDS"
 
 
 def test_pts_matches_xyz_point_for_point():

@@ -136,6 +136,10 @@ def build_scan_object(
     modifier.show_viewport = False
     _set_modifier_input(modifier, group, "Point Radius", float(point_radius))
     obj.show_bounds = True
+    # Blender draws a mesh of loose vertices as black dots in Solid mode, over the scan's own
+    # colours (ui/scan_display.py draws those): as bounds, the object leaves the points to it.
+    # Final renders (Cycles) still render the Geometry Nodes points.
+    obj.display_type = "BOUNDS"
     obj.data.materials.append(scan_material())
 
     props = obj.lfprobe_scan

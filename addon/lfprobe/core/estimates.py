@@ -1,4 +1,5 @@
-"""What a bake and a render will cost, said before they run (the grid and render panels show it):
+"""What a bake and a render will cost, said before they run (the grid and render panels show it,
+a line of a panel per line of these texts):
 a bake's memory from its probe count, resolution and storage; an F12 render's rays, and its
 time at the rays per second of the last render of this session."""
 
@@ -38,7 +39,7 @@ def bake_memory_text(counts: Sequence[int], resolution: int, bytes_per_texel: in
     """(text, warn) for the grid panel before Bake."""
     total = bake_memory_bytes(counts, resolution, bytes_per_texel)
     probes = bake_memory_bytes(counts, 1, 1)
-    text = (f"Bake: {probes} probes at {resolution}², about {total / 2**20:,.0f} MiB in memory "
+    text = (f"Bake: {probes} probes at {resolution}²\nabout {total / 2**20:,.0f} MiB in memory\n"
             f"({storage}, {bytes_per_texel} bytes a texel)")
     return text, total > MEMORY_WARNING_BYTES
 
@@ -63,7 +64,7 @@ def coverage_estimate(planned: Sequence[dict]) -> dict:
 
 def coverage_estimate_text(estimate: dict) -> tuple:
     """(text, warn) for the grid panel."""
-    text = (f"Estimate: {100 * estimate['mean_unknown']:.0f}% of directions unknown on average, "
+    text = (f"Estimate: {100 * estimate['mean_unknown']:.0f}% of directions unknown\n"
             f"{estimate['mostly_unknown']} of {estimate['probes']} probes mostly unknown")
     return text, estimate["mean_unknown"] > UNKNOWN_WARNING
 
@@ -83,9 +84,9 @@ def render_time_text(width: int, height: int, percentage: int, samples: int,
     text = f"F12: {rays / 1e6:.1f} M rays ({samples}×{samples} a pixel)"
     rate = last_render_rate() if rays_per_second is None else rays_per_second
     if not rate:
-        return text + "; the time shows after a first render", False
+        return text + "\ntime shown after a first render", False
     seconds = rays / rate
-    return (f"{text}, about {_duration(seconds)} at the last render's {rate / 1e6:.2f} M rays/s",
+    return (f"{text}\nabout {_duration(seconds)} at {rate / 1e6:.2f} M rays/s\n(the last render's rate)",
             seconds > RENDER_WARNING_SECONDS)
 
 

@@ -422,7 +422,7 @@ class LFPROBE_OT_grid_estimate(NativeJobOperator, bpy.types.Operator):
                         unknown=[float(p.get("classification", {}).get("unknown", 1.0)) for p in result])
         grid_obj.lfprobe_grid.estimate_json = json.dumps(estimate)
         text, _warn = estimates.coverage_estimate_text(estimate)
-        self.report({"INFO"}, f"Grid {grid_obj.name!r}: {text}")
+        self.report({"INFO"}, f"Grid {grid_obj.name!r}: {text.replace(chr(10), ', ')}")
         return {"FINISHED"}
 
 

@@ -155,6 +155,12 @@ class LFPROBE_PT_grid(_GridPanel, bpy.types.Panel):
         _draw_bake_estimate(layout, grid)
 
 
+def _draw_lines(layout, text: str, warn: bool, icon: bool = True) -> None:
+    """One label per line of `text` (a panel's labels do not wrap), the first with an icon."""
+    for n, line in enumerate(text.split("\n")):
+        layout.label(text=line, icon=("ERROR" if warn else "INFO") if icon and n == 0 else "NONE")
+
+
 def _draw_bake_estimate(layout, grid) -> None:
     """What the next Bake will hold in memory, with a warning when that is a lot."""
     storage, distance_step = grid.storage_choice()
@@ -164,18 +170,17 @@ def _draw_bake_estimate(layout, grid) -> None:
         return
     text, warn = estimates.bake_memory_text(tuple(grid.counts), int(grid.resolution), bytes_per_texel, storage)
     if grid.plan_from_data:
-        text += "; Plan From Data may use less"
-    for n, line in enumerate(textwrap.wrap(text, 70)):
-        layout.label(text=line, icon=("ERROR" if warn else "INFO") if n == 0 else "NONE")
+        text += "\n(Plan From Data may use less)"
+    _draw_lines(layout, text, warn)
     if warn:
-        layout.label(text="Fewer probes, a lower Resolution or Compact storage would use less")
+        _draw_lines(layout, "Fewer probes, a lower Resolution\nor Compact storage use less", False, icon=False)
     estimate = grid.estimate()
     if estimate.get("counts") == list(grid.counts) and estimate.get("probes"):
         text, warn = estimates.coverage_estimate_text(estimate)
-        for n, line in enumerate(textwrap.wrap(text, 70)):
-            layout.label(text=line, icon=("ERROR" if warn else "INFO") if n == 0 else "NONE")
+        _draw_lines(layout, text, warn)
         if warn:
-            layout.label(text="Probes far from every scanner see little: fewer probes, nearer the stations")
+            _draw_lines(layout, "Probes far from every scanner see little:\nfewer probes, nearer the stations",
+                        False, icon=False)
     layout.operator("object.lfprobe_grid_estimate", icon="VIEWZOOM").grid = grid.id_data.name
 
 

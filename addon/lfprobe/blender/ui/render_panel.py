@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import textwrap
-
 import bpy
 
 from ...core import estimates
@@ -40,7 +38,8 @@ class RENDER_PT_lfprobe_trace(bpy.types.Panel):
         render = context.scene.render
         text, warn = estimates.render_time_text(render.resolution_x, render.resolution_y,
                                                 render.resolution_percentage, settings.samples)
-        for n, line in enumerate(textwrap.wrap(text, 70)):
+        for n, line in enumerate(text.split("\n")):  # a panel's labels do not wrap
             layout.label(text=line, icon=("ERROR" if warn else "INFO") if n == 0 else "NONE")
         if warn:
-            layout.label(text="Lower the resolution % or Pixel Samples for a quicker preview")
+            layout.label(text="Lower the resolution % or Pixel Samples")
+            layout.label(text="for a quicker preview")

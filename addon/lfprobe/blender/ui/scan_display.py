@@ -65,6 +65,10 @@ def _draw():
     scene = getattr(bpy.context, "scene", None)
     if scene is None:
         return
+    space = getattr(bpy.context, "space_data", None)
+    shading = getattr(space, "shading", None)
+    if shading is not None and shading.type == "RENDERED" and scene.render.engine == "LFPROBE":
+        return  # the trace through the probes is the picture; the cloud would cover it
     scans = [o for o in scene.objects if o.type == "MESH" and o.lfprobe_scan.is_scan and o.visible_get()]
     if not scans:
         return
