@@ -101,3 +101,18 @@ def test_bake_on_the_preferences_scheduler_equals_the_local_bake():
         helpers.addon("core.cluster_bake").CONNECT_TIMEOUT_SECONDS = 10.0
     assert _files(folder) == local
     assert grid_obj.lfprobe_grid.baked
+
+
+def test_plan_from_data_bakes_here_when_a_scheduler_is_set():
+    """A planned bake is not handed to the cluster: with an (unreachable) scheduler in the
+    preferences, Plan From Data bakes on this machine, with a warning, instead of failing."""
+    grid_obj = _box_room_grid_moved()
+    grid_obj.lfprobe_grid.plan_from_data = True
+    preferences = helpers.addon("blender.preferences")
+    prefs = bpy.context.preferences.addons[preferences.ADDON_PACKAGE].preferences
+    prefs.scheduler_address = "tcp://127.0.0.1:9"
+    try:
+        assert bpy.ops.object.lfprobe_bake() == {"FINISHED"}
+    finally:
+        prefs.scheduler_address = ""
+    assert grid_obj.lfprobe_grid.baked

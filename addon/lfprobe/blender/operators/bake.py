@@ -251,11 +251,11 @@ class LFPROBE_OT_bake(GridJobOperator, bpy.types.Operator):
                 return None
             return self._start_mesh_bake(context, inputs.meshes)
         scheduler = self.scheduler.strip() or preferences.scheduler_address(context)
-        if scheduler:
-            if inputs.options.plan is not None:
-                self.report({"ERROR"}, "Probe bake: Plan From Data bakes on this machine; turn it off "
-                                       "to bake on the Dask scheduler, or clear the scheduler address")
-                return None
+        if scheduler and inputs.options.plan is not None:
+            # Planned bakes (per-probe resolutions, moves) are not handed to a cluster yet.
+            self.report({"WARNING"}, "Probe bake: Plan From Data bakes on this machine, not on the "
+                                     "Dask scheduler (turn it off to bake there)")
+        elif scheduler:
             self._step = "bake"
             return inputs.start_cluster_bake(self._staging, scheduler)
         self._step = "load"
