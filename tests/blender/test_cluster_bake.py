@@ -66,6 +66,7 @@ def _box_room_grid_moved():
     bpy.ops.object.lfprobe_grid_fit(margin=1.0, spacing=0.0)
     grid_obj.lfprobe_grid.counts = (2, 1, 1)
     grid_obj.lfprobe_grid.resolution = 32
+    grid_obj.lfprobe_grid.plan_from_data = False  # planned bakes stay on this machine
     scan.location = (1.0, 0.0, 0.0)  # the workers must move the points as Blender shows them
     grid_obj.location.x += 1.0
     bpy.context.view_layer.update()

@@ -35,7 +35,11 @@ def build_parser() -> argparse.ArgumentParser:
                           "instead of a new grid fitted to the scans")
     imp.add_argument("--counts", nargs=3, type=int, metavar=("NX", "NY", "NZ"))
     imp.add_argument("--resolution", type=int, default=0, help="probe map resolution (default: the grid's)")
-    imp.add_argument("--plan", action="store_true", help="Plan From Data: per-probe resolution, moves, drops")
+    plan = imp.add_mutually_exclusive_group()
+    plan.add_argument("--plan", dest="plan", action="store_true", default=True,
+                      help="Plan From Data: per-probe resolution, moves, drops (the default, as in the UI)")
+    plan.add_argument("--no-plan", dest="plan", action="store_false",
+                      help="every probe where the grid puts it, at --resolution")
     imp.add_argument("--margin", type=float, default=FIT_MARGIN,
                      help=f"new grid: metres inside the scans' bounds (default {FIT_MARGIN}, as Fit Grid)")
     imp.add_argument("--spacing", type=float, default=FIT_SPACING,

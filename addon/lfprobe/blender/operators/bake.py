@@ -130,7 +130,7 @@ class GridBake:
         )
         storage, distance_step = grid.storage_choice()
         self.options = pipeline.BakeOptions(resolution=grid.resolution, storage=storage, distance_step=distance_step)
-        if grid.plan_from_data:
+        if grid.plan_from_data and self.scans:
             # The grid's resolution is the largest a planned probe may get.
             self.options.plan = {"auto_resolution": True, "max_resolution": int(grid.resolution),
                                  "min_resolution": min(64, int(grid.resolution))}
@@ -245,10 +245,7 @@ class LFPROBE_OT_bake(GridJobOperator, bpy.types.Operator):
         self._staging = inputs.staging
         shutil.rmtree(self._staging, ignore_errors=True)  # left by a crashed Blender
         if inputs.meshes:
-            if inputs.options.plan is not None:
-                self.report({"ERROR"}, "Probe bake: Plan From Data works from scan points; "
-                                       "turn it off for mesh sources")
-                return None
+            # A mesh bakes exactly at the grid's resolution: planning reads scan points.
             return self._start_mesh_bake(context, inputs.meshes)
         scheduler = self.scheduler.strip() or preferences.scheduler_address(context)
         if scheduler and inputs.options.plan is not None:

@@ -143,7 +143,7 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
         description="Before baking, give each probe the resolution its points support (Resolution "
         "is then the largest allowed), move probes out of geometry and off walls, and drop "
         "the ones that stay useless (scan sources only)",
-        default=False,
+        default=True,
     )
     plan_json: StringProperty(
         name="Plan",
