@@ -106,15 +106,20 @@ def test_bad_scan_gives_a_clear_error_and_no_probe_set(tmp_path):
     assert not_a_set.returncode == 2 and "manifest" in not_a_set.stderr
 
 
+def _wall_scan(path, pitch):
+    """A 4 × 4 m wall 3 m along x, sampled every `pitch` metres, as an "x y z r g b" scan."""
+    g = np.arange(-2, 2, pitch)
+    yy, zz = np.meshgrid(g, g)
+    wall = np.column_stack([np.full(yy.size, 3.0), yy.ravel(), zz.ravel() + 1])
+    np.savetxt(path, np.column_stack([wall, np.full((yy.size, 3), 128)]), fmt="%.3f")
+    return path
+
+
 def test_killed_rebake_leaves_the_earlier_set_as_it_was(native, tmp_path):
     """SIGKILL in the middle of a bake over an earlier set: the earlier set is untouched (the new
     one is staged in SET.partial and swapped in only when complete), the staging folder holds
     only complete probe files, and the next bake clears it."""
-    scan = tmp_path / "room.xyz"
-    g = np.arange(-2, 2, 0.02)
-    yy, zz = np.meshgrid(g, g)
-    wall = np.column_stack([np.full(yy.size, 3.0), yy.ravel(), zz.ravel() + 1])
-    np.savetxt(scan, np.column_stack([wall, np.full((yy.size, 3), 128)]), fmt="%.3f")
+    scan = _wall_scan(tmp_path / "room.xyz", 0.02)
     out = tmp_path / "set"
     run_cli("bake", "--scan", scan, "--probe", 0, 0, 1, 0.5, 0, 1, "--res", 16, "--out", out,
             "--no-cache", "--quiet", check=True)
@@ -146,11 +151,7 @@ def test_interrupted_rebake_leaves_the_earlier_set_bit_for_bit(native, tmp_path,
     """Ctrl-C (SIGINT) at two moments of a bake over an earlier set, as soon as its staging
     folder exists (the first probe baking) and after some probes were written: exit 130, the
     earlier set as it was, no staging folder or temporary left, and the next bake succeeds."""
-    scan = tmp_path / "room.xyz"
-    g = np.arange(-2, 2, 0.01)
-    yy, zz = np.meshgrid(g, g)
-    wall = np.column_stack([np.full(yy.size, 3.0), yy.ravel(), zz.ravel() + 1])
-    np.savetxt(scan, np.column_stack([wall, np.full((yy.size, 3), 128)]), fmt="%.3f")
+    scan = _wall_scan(tmp_path / "room.xyz", 0.01)
     out = tmp_path / "set"
     run_cli("bake", "--scan", scan, "--probe", 0, 0, 1, "--res", 16, "--out", out, "--no-cache",
             "--quiet", check=True)
