@@ -10,7 +10,7 @@ packages=(
   pybind11-dev libembree-dev libopenexr-dev libglm-dev libtbb-dev
   nlohmann-json3-dev libfast-float-dev libgtest-dev libstb-dev libxxhash-dev
   python3-skimage python3-pip python3-matplotlib python3-open3d python3-distributed blender xvfb
-  xauth xdotool clang-format
+  xauth xdotool clang-format clang libclang-rt-14-dev llvm
 )
 missing=()
 for p in "${packages[@]}"; do

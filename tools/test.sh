@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Every test: installs and builds what is missing (tools/setup.sh, with -Werror), checks the
 # C++ sources' formatting, runs the GoogleTest suite, builds and runs it again under
-# AddressSanitizer + UndefinedBehaviorSanitizer, then the pytest suite of the bpy-free Python.
+# AddressSanitizer + UndefinedBehaviorSanitizer, runs every fuzz harness for seconds, then the
+# pytest suite of the bpy-free Python.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 cd "$root"
@@ -40,6 +41,10 @@ cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
 cmake --build build-asan -j"$(nproc)" --target lfprobe_tests
 ASAN_OPTIONS="detect_leaks=1:abort_on_error=1" UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
   ./build-asan/lfprobe_tests --gtest_brief=1
+
+echo "== fuzzing: a short run of every libFuzzer harness (clang, ASan + UBSan) =="
+# Seconds each, from the seeds (tools/fuzz.sh runs them for long; its help says how).
+bash tools/fuzz.sh --seconds 4 --jobs 2 --fresh-corpus
 
 echo "== Python tests (no Blender) =="
 # Independent implementations the metrics are checked against, kept out of the system Python.

@@ -5,9 +5,11 @@
 // The arrays follow the header raw, read back with one copy each.
 #include "lfprobe/scan_cache.hpp"
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -139,6 +141,24 @@ template <class T>
     return static_cast<std::size_t>(count) * sizeof(T);
 }
 
+[[nodiscard]] bool finite(const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+[[nodiscard]] bool all_finite(const std::vector<glm::vec3>& values) {
+    return std::all_of(values.begin(), values.end(), [](const glm::vec3& v) {
+        return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+    });
+}
+
+// What every scan reader guarantees of the scan it returns.
+[[nodiscard]] bool holds_a_valid_scan(const ScanFile& scan) {
+    return finite(scan.origin) && (!scan.has_scanner || finite(scan.scanner)) &&
+           all_finite(scan.positions) && all_finite(scan.colors) && all_finite(scan.normals) &&
+           std::all_of(scan.intensities.begin(), scan.intensities.end(),
+                       [](float i) { return std::isfinite(i); });
+}
+
 // The entry's content when it is complete and matches `key`, else nullopt.
 [[nodiscard]] std::optional<ScanFile> load_entry(const fs::path& entry, const CacheKey& key,
                                                  const std::string& path) {
@@ -204,6 +224,12 @@ template <class T>
         }
         if (header.flags & has_intensities) {
             take(scan.intensities);
+        }
+        // The checksum proves the entry is what was written; these prove it is what a reader
+        // returns (finite values only), so an entry written by a faulty or foreign writer is
+        // parsed again rather than trusted.
+        if (!holds_a_valid_scan(scan)) {
+            return std::nullopt;
         }
         return scan;
     } catch (const IoError&) {

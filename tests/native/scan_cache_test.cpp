@@ -5,11 +5,16 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
+
+// The entry checksum (header-only xxHash, as the cache uses it).
+#define XXH_INLINE_ALL
+#include <xxhash.h>
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/progress.hpp"
@@ -196,6 +201,36 @@ TEST(CacheScan, DamagedEntriesAreIgnoredAndRewritten) {
     damage_and_check("a NaN value", change_last_point(std::numeric_limits<float>::quiet_NaN()));
     damage_and_check("a 3e38 value", change_last_point(3e38f));
     EXPECT_EQ(files_in(cache).size(), 1u); // no temporary files left behind
+}
+
+// Found by the cache's fuzz harness (tests/fuzz/scan_cache_fuzzer.cpp): an entry whose checksum
+// matches but whose values no reader returns (a faulty or foreign writer) is parsed again too.
+TEST(CacheScan, ChecksummedEntriesWithNonFiniteValuesAreParsedAgain) {
+    const fs::path dir = fresh_dir("foreign");
+    const fs::path cache = dir / "cache";
+    const fs::path path = dir / "scan.xyz";
+    write_file(path, every_channel);
+    bool hit = false;
+    const ScanFile reference = cached(path, cache, hit);
+    const fs::path entry = files_in(cache).at(0);
+    std::string bytes;
+    {
+        std::ifstream in(entry, std::ios::binary);
+        bytes.assign(std::istreambuf_iterator<char>(in), {});
+    }
+    constexpr std::size_t header_bytes = 112; // CacheHeader; its last field is the checksum
+    for (const float value :
+         {std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+        std::string changed = bytes;
+        std::memcpy(changed.data() + changed.size() - sizeof(float), &value, sizeof(value));
+        const std::uint64_t sum =
+            XXH3_64bits(changed.data() + header_bytes, changed.size() - header_bytes);
+        std::memcpy(changed.data() + header_bytes - sizeof(sum), &sum, sizeof(sum));
+        write_file(entry, changed);
+        const ScanFile read = cached(path, cache, hit);
+        EXPECT_FALSE(hit) << value;
+        expect_same(reference, read);
+    }
 }
 
 TEST(CacheScan, BadInputAndCancelledParsesWriteNothing) {
