@@ -18,6 +18,14 @@ namespace lfprobe::python {
 
 namespace py = pybind11;
 
+// lfprobe._native.LfprobeWarning (a UserWarning): what a job's Progress::warn collected, raised
+// as Python warnings when its result is taken, so the CLI prints them and scripts can filter.
+inline PyObject* lfprobe_warning_type() {
+    static PyObject* const type =
+        PyErr_NewException("lfprobe._native.LfprobeWarning", PyExc_UserWarning, nullptr);
+    return type;
+}
+
 class Job {
 public:
     // `work` runs on a new thread; `to_python` converts its result under the GIL.
@@ -81,6 +89,11 @@ public:
             throw std::runtime_error("the job's result was already taken");
         }
         taken_ = true;
+        for (const std::string& warning : progress_.warnings()) {
+            if (PyErr_WarnEx(lfprobe_warning_type(), warning.c_str(), 1) != 0) {
+                throw py::error_already_set(); // warnings turned into errors by a filter
+            }
+        }
         return take_();
     }
 

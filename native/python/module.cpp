@@ -430,6 +430,7 @@ PYBIND11_MODULE(_native, m) {
         py::arg("path"), py::arg("columns") = "", py::arg("cache_dir") = "",
         "The parse cache's entry for a scan file in cache_dir (it may not exist yet); empty "
         "where the cache does not apply.");
+    m.attr("LfprobeWarning") = py::handle(lfprobe::python::lfprobe_warning_type());
     m.def("start_load_scans", &start_load, py::arg("paths"),
           py::arg("scanners") = std::vector<std::vector<double>>{},
           py::arg("world_offset") = py::none(), py::arg("columns") = "", py::arg("cache_dir") = "",
@@ -525,6 +526,13 @@ PYBIND11_MODULE(_native, m) {
         py::arg("folder"), py::arg("storage"), py::arg("distance_step") = 0.0,
         "Sets how the set's probes load into memory (its manifest's \"storage\"; the EXR files "
         "keep full precision) and the manifest's per-probe memory_bytes.");
+    m.def(
+        "check_probe_set_manifest",
+        [](const std::string& folder) { return read_manifest(folder).to_json().dump(); },
+        py::arg("folder"),
+        "Reads the set's manifest.json as a render does, refusing what a render would refuse "
+        "(format version, probe file names, counts, resolutions, types); returns it as JSON "
+        "text.");
     m.def(
         "probe_storage",
         [](const py::object& storage, double distance_step) {

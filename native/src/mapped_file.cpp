@@ -44,7 +44,9 @@ private:
 } // namespace
 
 MappedFile::MappedFile(const std::string& path) : path_(path) {
-    const FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC));
+    // O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer, forever; the
+    // fstat below then refuses it. Regular files ignore the flag.
+    const FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK));
     if (fd.get() < 0) {
         throw_system_error(path, "open", errno);
     }

@@ -267,6 +267,10 @@ Mesh read_ply_mesh(const std::string& path) {
     mesh.material.assign(mesh.triangles.size(), 0);
     mesh.object.assign(mesh.triangles.size(), 0);
     mesh.validate(path);
+    if (mesh.triangles.empty()) {
+        throw InputError(path + ": no faces (expected an element face with vertex_indices; a "
+                                "point cloud is a scan, not a mesh)");
+    }
     return mesh;
 }
 

@@ -371,6 +371,12 @@ Mesh read_obj(const std::string& path) {
         mesh.object_names.push_back("default");
     }
     mesh.validate(path);
+    // A file that is not an OBJ (garbage, empty, only comments) parses to nothing: refuse it
+    // rather than render an empty scene that looks like a valid answer.
+    if (mesh.triangles.empty()) {
+        throw InputError(path + ": no faces (expected an OBJ with 'f' lines of three or more "
+                                "vertices)");
+    }
     return mesh;
 }
 

@@ -1,5 +1,6 @@
 #include "lfprobe/probe_exr.hpp"
 
+#include <cmath>
 #include <filesystem>
 #include <mutex>
 #include <string>
@@ -82,6 +83,41 @@ void write_probe_exr(const std::string& path, const ProbeMap& map) {
     }
 }
 
+namespace {
+
+// What a texel can mean (docs/DESIGN.md §3): a distance is NaN (unknown), +inf (empty) or a
+// finite number of metres, 0 or more; a confidence lies in [0, 1]; a surface has a radiance and
+// a normal that are numbers. Anything else (a negative or -inf distance, a NaN confidence) was
+// not written by a bake, and a trace would answer from it without complaint.
+void require_meaningful_texels(const ProbeMap& map, const std::string& path) {
+    const auto where = [&](std::size_t i) {
+        return path + ": texel (" + std::to_string(i % static_cast<std::size_t>(map.resolution)) +
+               ", " + std::to_string(i / static_cast<std::size_t>(map.resolution)) + ")";
+    };
+    for (std::size_t i = 0; i < map.texel_count(); ++i) {
+        const float d = map.distance[i];
+        if (d < 0.0f) {
+            throw InputError(where(i) + ": distance " + std::to_string(d) +
+                             " (expected 0 or more metres, NaN for unknown, +inf for empty)");
+        }
+        const float confidence = static_cast<float>(map.rgba[4 * i + 3]);
+        if (!(confidence >= 0.0f && confidence <= 1.0f)) {
+            throw InputError(where(i) + ": confidence (A) " + std::to_string(confidence) +
+                             " (expected a number from 0 to 1)");
+        }
+        if (std::isfinite(d)) {
+            const glm::vec3 rgb = map.radiance_at(i);
+            const glm::vec3 n = map.normal_at(i);
+            if (std::isnan(rgb.x) || std::isnan(rgb.y) || std::isnan(rgb.z) || std::isnan(n.x) ||
+                std::isnan(n.y) || std::isnan(n.z)) {
+                throw InputError(where(i) + ": a surface texel whose radiance or normal is NaN");
+            }
+        }
+    }
+}
+
+} // namespace
+
 ProbeMap read_probe_exr(const std::string& path) {
     use_all_cores_for_exr();
     if (!std::filesystem::exists(path)) {
@@ -113,6 +149,7 @@ ProbeMap read_probe_exr(const std::string& path) {
         ProbeMap map(w, position);
         file.setFrameBuffer(probe_frame_buffer(map));
         file.readPixels(window.min.y, window.max.y);
+        require_meaningful_texels(map, path);
         return map;
     } catch (const InputError&) {
         throw;

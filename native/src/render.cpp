@@ -274,12 +274,35 @@ RenderSettings with_sample_angle(const RenderSettings& settings, const Camera& c
 
 } // namespace
 
+namespace {
+
+// Settings come from users (the CLI, the add-on, scripts): a NaN or negative thickness would
+// silently answer every ray as a miss or a hit.
+void require_valid_trace_settings(const RenderSettings& settings) {
+    const TraceSettings& t = settings.trace.probe;
+    if (!std::isfinite(t.thickness) || t.thickness < 0.0) {
+        throw InputError("render: thickness must be a finite number of metres, 0 or more (got " +
+                         std::to_string(t.thickness) + ")");
+    }
+    if (!std::isfinite(t.thickness_texels) || t.thickness_texels < 0.0) {
+        throw InputError("render: thickness_texels must be a finite number, 0 or more (got " +
+                         std::to_string(t.thickness_texels) + ")");
+    }
+    if (!(settings.sample_x >= 0.0 && settings.sample_x <= 1.0 && settings.sample_y >= 0.0 &&
+          settings.sample_y <= 1.0)) {
+        throw InputError("render: the sample position must lie in the pixel (0 to 1)");
+    }
+}
+
+} // namespace
+
 RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
                                 const RenderSettings& settings, Progress* progress,
                                 RenderStats* stats) {
     if (settings.tile_size < 1) {
         throw InputError("render: tile_size must be at least 1");
     }
+    require_valid_trace_settings(settings);
     const int n = samples_per_axis(settings.samples_per_pixel, "render");
     // An eye at a probe (docs/DESIGN.md §4): every ray is one texel lookup in that probe; only rays
     // it cannot answer (UNKNOWN texels) go through the whole field.

@@ -370,11 +370,18 @@ ScanFile read_scan_file_cached(const std::string& path, const ScanReadOptions& o
         try {
             std::error_code error;
             fs::create_directories(cache_dir, error);
-            if (!error) {
-                write_entry(entry, *key, scan);
+            if (error) {
+                throw IoError("cannot create the folder: " + error.message());
             }
-        } catch (const std::exception&) {
-            // Caching is best-effort: a read-only or full cache disk must not fail the import.
+            write_entry(entry, *key, scan);
+        } catch (const std::exception& e) {
+            // Caching is best-effort: a read-only or full cache disk must not fail the import,
+            // but the user hears why the next import will parse again.
+            if (progress != nullptr) {
+                progress->warn(path + ": the parse cache could not be written in " + cache_dir +
+                               " (" + e.what() + "); the scan was read, and will be parsed again " +
+                               "next time");
+            }
         }
     }
     return scan;

@@ -1,7 +1,10 @@
 #include "lfprobe/texture.hpp"
 
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
+#include <fstream>
 #include <memory>
 
 #include <stb_image.h>
@@ -11,6 +14,48 @@
 
 namespace lfprobe {
 
+namespace {
+
+// stb_image trusts a PNG chunk's declared length and grows its buffer to it before reading: a
+// 1 KB file declaring a 1.2 GB IDAT chunk makes a 2 GB allocation (found by the OBJ/MTL fuzz
+// harness). The chunks are walked here first: each must fit in the file, and there is one IHDR.
+void require_png_chunks_within_the_file(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    std::array<unsigned char, 8> signature{};
+    if (!in.read(reinterpret_cast<char*>(signature.data()), signature.size()) ||
+        signature != std::array<unsigned char, 8>{0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'}) {
+        return; // not a PNG: stb's other readers size their buffers from the checked header
+    }
+    const std::uintmax_t file_size = std::filesystem::file_size(path);
+    std::uintmax_t at = signature.size();
+    int headers = 0;
+    for (;;) {
+        std::array<unsigned char, 8> chunk{};
+        if (!in.read(reinterpret_cast<char*>(chunk.data()), chunk.size())) {
+            return; // the end, or a truncated chunk header: stb reports what it makes of it
+        }
+        const std::uintmax_t length = (std::uintmax_t{chunk[0]} << 24) |
+                                      (std::uintmax_t{chunk[1]} << 16) |
+                                      (std::uintmax_t{chunk[2]} << 8) | chunk[3];
+        const std::string type(reinterpret_cast<const char*>(chunk.data()) + 4, 4);
+        if (length + 12 > file_size - at) {
+            throw InputError(path + ": PNG chunk '" + type + "' at byte " + std::to_string(at) +
+                             " declares " + std::to_string(length) +
+                             " bytes, more than the file holds (a truncated or damaged PNG)");
+        }
+        if (type == "IHDR" && ++headers > 1) {
+            throw InputError(path + ": a PNG with more than one IHDR chunk (a damaged PNG)");
+        }
+        if (type == "IEND") {
+            return;
+        }
+        at += length + 12;
+        in.seekg(static_cast<std::streamoff>(at));
+    }
+}
+
+} // namespace
+
 Texture Texture::load(const std::string& path) {
     std::error_code ec;
     if (!std::filesystem::exists(path, ec)) {
@@ -19,6 +64,7 @@ Texture Texture::load(const std::string& path) {
     if (!std::filesystem::is_regular_file(path, ec)) {
         throw MissingFileError(path + ": cannot open the texture (not a regular file)");
     }
+    require_png_chunks_within_the_file(path);
     int w = 0;
     int h = 0;
     int channels = 0;

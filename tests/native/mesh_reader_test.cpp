@@ -181,6 +181,27 @@ TEST(MeshReader, FilesThatAreNotRegularOrTooLargeAreRefusedBeforeReading) {
     }
 }
 
+// Found by the OBJ/MTL fuzz harness: a 2 × 2 PNG whose second IDAT chunk declares 1.2 GB made
+// the texture decoder allocate 2 GB before finding the file short. Refused from the chunk walk.
+TEST(MeshReader, APngChunkLongerThanItsFileIsRefusedBeforeDecoding) {
+    std::string png("\x89PNG\r\n\x1a\n", 8);
+    const unsigned char ihdr[] = {0, 0, 0, 13, 'I', 'H', 'D', 'R', 0, 0, 0, 2, 0,
+                                  0, 0, 2, 8,  2,   0,   0,   0,   0, 0, 0, 0};
+    png.append(reinterpret_cast<const char*>(ihdr), sizeof ihdr);
+    const unsigned char idat[] = {0x49, 0x49, 0x49, 0x10, 'I', 'D', 'A', 'T', 1, 2, 3, 4};
+    png.append(reinterpret_cast<const char*>(idat), sizeof idat);
+    try {
+        (void)Texture::load(temp_file("long_chunk.png", png));
+        ADD_FAILURE() << "decoded a PNG whose chunk is longer than the file";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("more than the file holds"), std::string::npos)
+            << e.what();
+    }
+    std::string twice = png.substr(0, 8 + sizeof ihdr);
+    twice.append(reinterpret_cast<const char*>(ihdr), sizeof ihdr);
+    EXPECT_THROW((void)Texture::load(temp_file("two_headers.png", twice)), InputError);
+}
+
 TEST(MeshReader, NonFiniteVertexIsAnError) {
     EXPECT_THROW((void)read_obj(temp_file("nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")),
                  InputError);

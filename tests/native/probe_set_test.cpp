@@ -3,7 +3,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <iterator>
+#include <limits>
 #include <string>
 #include <thread>
 
@@ -68,6 +70,60 @@ TEST(ProbeSet, ProbeSurvivesWriteReadBitForBit) {
     for (const auto& entry : fs::directory_iterator(dir)) {
         EXPECT_EQ(entry.path().filename(), "p.exr"); // no temporary left behind
     }
+}
+
+// Issue 22, item 13: a probe EXR whose texels no bake writes (a negative or -inf distance, a
+// confidence that is not a number from 0 to 1, a surface with a NaN radiance) is refused naming
+// the file and the texel, instead of rendering without complaint; NaN (unknown) and +inf
+// (empty) distances are the format's own and still read.
+TEST(ProbeSet, ProbeTexelsNoBakeWritesAreRefusedNamingTheTexel) {
+    const fs::path dir = fresh_dir("bad_texels");
+    const auto written = [&](const std::function<void(ProbeMap&)>& change) {
+        ProbeMap map(8, glm::dvec3(0.0));
+        for (std::size_t i = 0; i < map.texel_count(); ++i) {
+            map.set_surface(i, 2.0f, glm::vec3(0.5f), glm::vec3(0.0f, 0.0f, 1.0f), 1.0f);
+        }
+        map.set_unknown(0);
+        map.set_empty(1);
+        change(map);
+        const std::string path = (dir / "p.exr").string();
+        write_probe_exr(path, map);
+        return path;
+    };
+    EXPECT_NO_THROW((void)read_probe_exr(written([](ProbeMap&) {})));
+    const auto refused = [&](const char* what, const std::function<void(ProbeMap&)>& change,
+                             const std::string& expected) {
+        try {
+            (void)read_probe_exr(written(change));
+            ADD_FAILURE() << what << ": accepted";
+        } catch (const InputError& e) {
+            const std::string message = e.what();
+            EXPECT_NE(message.find("p.exr: texel (3, 2)"), std::string::npos) << message;
+            EXPECT_NE(message.find(expected), std::string::npos) << message;
+        }
+    };
+    constexpr std::size_t texel = 3 + 8 * 2;
+    refused(
+        "negative distance", [](ProbeMap& m) { m.distance[texel] = -0.5f; }, "distance");
+    refused(
+        "-inf distance",
+        [](ProbeMap& m) { m.distance[texel] = -std::numeric_limits<float>::infinity(); },
+        "distance");
+    refused(
+        "NaN confidence",
+        [](ProbeMap& m) {
+            m.rgba[4 * texel + 3] = Imath::half(std::numeric_limits<float>::quiet_NaN());
+        },
+        "confidence");
+    refused(
+        "confidence above 1", [](ProbeMap& m) { m.rgba[4 * texel + 3] = Imath::half(2.0f); },
+        "confidence");
+    refused(
+        "NaN radiance",
+        [](ProbeMap& m) {
+            m.rgba[4 * texel] = Imath::half(std::numeric_limits<float>::quiet_NaN());
+        },
+        "NaN");
 }
 
 TEST(ProbeSet, BakedSetRoundTripsThroughTheManifest) {

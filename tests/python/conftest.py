@@ -6,7 +6,10 @@ import sys
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.join(ROOT, "addon"))
+# LFPROBE_ADDON_DIR: another copy of the add-on's folder, such as the one tools/test.sh builds
+# with a sanitized native module; ./lfprobe honours it too.
+ADDON_DIR = os.environ.get("LFPROBE_ADDON_DIR") or os.path.join(ROOT, "addon")
+sys.path.insert(0, ADDON_DIR)
 
 SHARED_DATA = os.environ.get("LFPROBE_SHARED_DATA", os.path.join(ROOT, "..", "shared", "data"))
 

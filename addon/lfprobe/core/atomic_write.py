@@ -28,9 +28,12 @@ def atomic_open(path: str, mode: str = "w", encoding: str = "utf-8") -> Iterator
             yield stream
         os.chmod(tmp, 0o666 & ~_UMASK)  # mkstemp makes 0600; the file is as open() would make it
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as error:
         if os.path.exists(tmp):
             os.remove(tmp)
+        if isinstance(error, OSError) and error.filename is None and error.errno is not None:
+            # A full disk shows up in write() or close() with no file named: name the target.
+            raise OSError(error.errno, error.strerror, path) from error
         raise
 
 

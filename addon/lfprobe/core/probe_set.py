@@ -26,7 +26,22 @@ def read_manifest(folder: str) -> dict:
             raise ValueError(f"{path}: invalid JSON: {error}") from error
     if manifest.get("format") != "lfprobe-probe-set":
         raise ValueError(f'{path}: not an lfprobe probe set (expected "format": "lfprobe-probe-set")')
+    _check_as_a_render_would(folder)
     return manifest
+
+
+def _check_as_a_render_would(folder: str) -> None:
+    """The native reader's checks (format version, plain probe file names, counts, resolutions,
+    the type of every field): what `info` or a report reads is what a render accepts, and a
+    mistyped field is a clear error naming manifest.json, not a traceback. Skipped only where the
+    native module cannot be loaded (then nothing can render the set either)."""
+    from .native import NativeModuleError, load
+
+    try:
+        native = load()
+    except NativeModuleError:
+        return
+    native.check_probe_set_manifest(folder)
 
 
 def coarse_level_bytes(resolution: int, storage: Optional[dict] = None) -> int:

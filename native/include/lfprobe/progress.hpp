@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include "lfprobe/error.hpp"
 
@@ -36,6 +37,16 @@ public:
         return stage_;
     }
 
+    // Something the user should hear about that did not stop the work (a cache that could not
+    // be written): kept, and raised as a Python warning when the job's result is taken.
+    void warn(const std::string& message) {
+        std::lock_guard lock(stage_mutex_);
+        warnings_.push_back(message);
+    }
+    [[nodiscard]] std::vector<std::string> warnings() const {
+        std::lock_guard lock(stage_mutex_);
+        return warnings_;
+    }
     void request_cancel() { cancel_.store(true, std::memory_order_relaxed); }
     [[nodiscard]] bool cancel_requested() const { return cancel_.load(std::memory_order_relaxed); }
     // Called by workers between units of work.
@@ -48,6 +59,7 @@ public:
 private:
     mutable std::mutex stage_mutex_;
     std::string stage_;
+    std::vector<std::string> warnings_;
     std::atomic<std::uint64_t> total_{1};
     std::atomic<std::uint64_t> done_{0};
     std::atomic<bool> cancel_{false};

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ...core.cli.arguments import finite_float
 from ...core.grid_fit import FIT_MARGIN, FIT_SPACING
 from . import commands
 
@@ -13,7 +14,7 @@ def _add_storage_arguments(parser) -> None:
                         help="how the probes load into memory (the files keep full precision): full "
                              "(18 bytes a texel) or compact (7: 8-bit sRGB radiance, 16-bit distance, "
                              "8+8-bit normals, no confidence); default: the grid's Storage")
-    parser.add_argument("--distance-step", type=float, default=None, metavar="M",
+    parser.add_argument("--distance-step", type=finite_float, default=None, metavar="M",
                         help="compact: the distance quantum in metres (default: the grid's, 0.001)")
 
 
@@ -40,9 +41,9 @@ def build_parser() -> argparse.ArgumentParser:
                       help="Plan From Data: per-probe resolution, moves, drops (the default, as in the UI)")
     plan.add_argument("--no-plan", dest="plan", action="store_false",
                       help="every probe where the grid puts it, at --resolution")
-    imp.add_argument("--margin", type=float, default=FIT_MARGIN,
+    imp.add_argument("--margin", type=finite_float, default=FIT_MARGIN,
                      help=f"new grid: metres inside the scans' bounds (default {FIT_MARGIN}, as Fit Grid)")
-    imp.add_argument("--spacing", type=float, default=FIT_SPACING,
+    imp.add_argument("--spacing", type=finite_float, default=FIT_SPACING,
                      help=f"new grid: largest probe spacing (default {FIT_SPACING} m, as Fit Grid; 0: keep the "
                           "new grid's counts, 2×2×2)"),
     imp.add_argument("--save-as", metavar="FILE.blend", help="save here (default: over the opened .blend)")
@@ -69,9 +70,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="the scene camera over the scene's frame range, a view every --frame-step frames")
     place.add_argument("--frame-step", type=int, default=None, metavar="K", help="with --camera-path: every K frames")
     place.add_argument("--grid", default="", metavar="NAME", help="probe grid (default: the scene's only grid)")
-    place.add_argument("--target-unknown", type=float, default=None, metavar="F",
+    place.add_argument("--target-unknown", type=finite_float, default=None, metavar="F",
                        help="stop when every view has at most this fraction of UNKNOWN pixels (grid default 0.01)")
-    place.add_argument("--budget-mib", type=float, default=None, metavar="M",
+    place.add_argument("--budget-mib", type=finite_float, default=None, metavar="M",
                        help="memory budget of the whole probe set in MiB (0: none)")
     place.add_argument("--max-added", type=int, default=None, metavar="N", help="most probes added")
     place.add_argument("--no-save", action="store_true", help="do not save the .blend afterwards")
@@ -86,7 +87,7 @@ def build_parser() -> argparse.ArgumentParser:
                         help="probe grid (default: the render settings' grid, else the first baked one)")
     render.add_argument("--mode", choices=["auto", "nearest", "grid"], default=None,
                         help="probe order (default: the scene's render setting)")
-    render.add_argument("--thickness", type=float, default=None, help="surface thickness in metres")
+    render.add_argument("--thickness", type=finite_float, default=None, help="surface thickness in metres")
     render.add_argument("--threads", type=int, default=None, help="cores (0: all); the image is the same")
     render.add_argument("--spp", type=int, default=None, metavar="N",
                         help="samples per pixel, 1 or a square (default: the scene's Pixel Samples squared)")
@@ -107,6 +108,6 @@ def build_parser() -> argparse.ArgumentParser:
     compare.add_argument("--grid", default="", metavar="NAME", help="probe grid (default as for render)")
     compare.add_argument("--spp", type=int, default=16,
                          help="samples per pixel of the ground truth and the probe render alike (1 or a square)")
-    compare.add_argument("--ppd", type=float, default=67.0, help="FLIP pixels per degree")
+    compare.add_argument("--ppd", type=finite_float, default=67.0, help="FLIP pixels per degree")
     compare.set_defaults(run=commands.run_compare)
     return parser

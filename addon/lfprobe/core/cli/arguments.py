@@ -5,7 +5,20 @@ options (bake, place), the planning options (place, bake --auto) and the storage
 from __future__ import annotations
 
 import argparse
+import math
 from typing import List, Optional
+
+
+def finite_float(text: str) -> float:
+    """argparse type of every number option: a float, but not nan or inf (which float() reads),
+    so that a typo is exit 2 with a message instead of a silently meaningless run."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return value
 
 
 def triples(values: Optional[List[List[float]]], option: str) -> List[List[float]]:
@@ -28,12 +41,12 @@ COLUMNS_HELP = ('text scans: column names, e.g. "x y z i r g b"; `station` names
 
 def add_placement_arguments(parser: argparse.ArgumentParser) -> None:
     """Where the scanners stood and where the probes go, shared by `bake` and `place`."""
-    parser.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X",
+    parser.add_argument("--scanner", nargs="+", type=finite_float, action="append", metavar="X",
                         help=SCANNER_HELP)
-    parser.add_argument("--probe", nargs="+", type=float, action="append", metavar="X",
+    parser.add_argument("--probe", nargs="+", type=finite_float, action="append", metavar="X",
                         help="probe positions X Y Z [X Y Z ...] (world coordinates)")
-    parser.add_argument("--grid-min", nargs=3, type=float, metavar=("X", "Y", "Z"))
-    parser.add_argument("--grid-max", nargs=3, type=float, metavar=("X", "Y", "Z"))
+    parser.add_argument("--grid-min", nargs=3, type=finite_float, metavar=("X", "Y", "Z"))
+    parser.add_argument("--grid-max", nargs=3, type=finite_float, metavar=("X", "Y", "Z"))
     parser.add_argument("--counts", nargs=3, type=int, metavar=("NX", "NY", "NZ"))
 
 
@@ -42,17 +55,17 @@ def add_plan_arguments(parser: argparse.ArgumentParser) -> None:
     group = parser.add_argument_group("planning (place, bake --auto)")
     group.add_argument("--min-res", type=int, default=64, help="smallest resolution chosen")
     group.add_argument("--max-res", type=int, default=4096, help="largest resolution chosen")
-    group.add_argument("--footprint", type=float, default=0.0, metavar="M",
+    group.add_argument("--footprint", type=finite_float, default=0.0, metavar="M",
                        help="texel size wanted at a probe's median distance (metres); caps the "
                             "resolution; 0 = as fine as the data supports")
-    group.add_argument("--quantile", type=float, default=0.5,
+    group.add_argument("--quantile", type=finite_float, default=0.5,
                        help="quantile of the per-direction supported resolutions (0.5: median)")
-    group.add_argument("--samples-per-spacing", type=float, default=2.5, metavar="K",
+    group.add_argument("--samples-per-spacing", type=finite_float, default=2.5, metavar="K",
                        help="texels per point spacing along each axis (default 2.5: the splatted "
                             "surface sampled finer than twice its point density)")
-    group.add_argument("--clearance", type=float, default=0.05, metavar="M",
+    group.add_argument("--clearance", type=finite_float, default=0.05, metavar="M",
                        help="a probe with surfaces nearer than this is too close")
-    group.add_argument("--max-move", type=float, default=0.0, metavar="M",
+    group.add_argument("--max-move", type=finite_float, default=0.0, metavar="M",
                        help="how far a probe may be moved (0: 0.45 × grid spacing, 0.25 m loose)")
     group.add_argument("--no-classify", action="store_true",
                        help="no classification, no moves, no drops (resolution only)")
@@ -81,7 +94,7 @@ DISTANCE_STEP_HELP = ("compact storage: distance quantum in metres (default 0.00
 
 def add_storage_arguments(parser, choices, default, text: str) -> None:
     parser.add_argument("--storage", choices=choices, default=default, help=text)
-    parser.add_argument("--distance-step", type=float, default=0.0, metavar="M", help=DISTANCE_STEP_HELP)
+    parser.add_argument("--distance-step", type=finite_float, default=0.0, metavar="M", help=DISTANCE_STEP_HELP)
 
 
 def bake_storage(args):

@@ -14,6 +14,7 @@ import argparse
 import json
 from typing import Dict
 
+from .arguments import finite_float
 from ..compare import compare_files
 from ..json_values import strict_json
 
@@ -85,7 +86,7 @@ def add_parsers(subparsers) -> argparse.ArgumentParser:
     compare.add_argument("test", metavar="TEST.exr", help="image to evaluate (same camera and size; same kinds)")
     compare.add_argument("--json", action="store_true",
                          help="print one JSON object (psnr is null for identical images: infinite PSNR)")
-    compare.add_argument("--ppd", type=float, default=67.0, help="FLIP pixels per degree (default 67)")
+    compare.add_argument("--ppd", type=finite_float, default=67.0, help="FLIP pixels per degree (default 67)")
     compare.add_argument("--error-map", metavar="OUT.png", help="write the FLIP error as a magma PNG")
     compare.set_defaults(run=_cmd_compare)
     return compare

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
+import warnings
 from typing import Optional, Sequence
 
 from .. import defaults, native
@@ -21,7 +22,7 @@ from ..probe_set import PAPER_BYTES_PER_2048_PROBE, summarize
 from ..probe_storage import describe as describe_storage
 from ..trace_hints import camera_of, unknown_hint
 from ..progress import TerminalProgress
-from .arguments import (COLUMNS_HELP, SCAN_HELP, add_placement_arguments, add_plan_arguments, add_storage_arguments,
+from .arguments import (finite_float, COLUMNS_HELP, SCAN_HELP, add_placement_arguments, add_plan_arguments, add_storage_arguments,
                         bake_storage, plan_options, triples)
 
 
@@ -265,13 +266,13 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--columns", help=COLUMNS_HELP)
     bake.add_argument("--cache", default=None, metavar="DIR", help="parsed-scan cache folder")
     bake.add_argument("--no-cache", action="store_true", help="parse the scans without the cache")
-    bake.add_argument("--splat-scale", type=float, default=defaults.bake("splat_scale"), help="splat radius / point spacing")
+    bake.add_argument("--splat-scale", type=finite_float, default=defaults.bake("splat_scale"), help="splat radius / point spacing")
     bake.add_argument("--hole-fill", type=int, default=defaults.bake("hole_fill_texels"), help="largest hole (texels) to fill")
     bake.add_argument("--normal-k", type=int, default=defaults.bake("normal_neighbours"), help="neighbours for PCA normals")
-    bake.add_argument("--splat-edge-margin", type=float, default=defaults.bake("splat_edge_margin"),
+    bake.add_argument("--splat-edge-margin", type=finite_float, default=defaults.bake("splat_edge_margin"),
                       metavar="S", help="how far (point spacings) a point at its surface's edge splats "
                                         "outward; negative: full discs (bakes before this option)")
-    bake.add_argument("--lod-texels", type=float, default=defaults.bake("lod_texels"), metavar="T",
+    bake.add_argument("--lod-texels", type=finite_float, default=defaults.bake("lod_texels"), metavar="T",
                       help="scans: where the point hierarchy's cell surfels are at most T texels apart "
                            "as the probe sees them they stand in for the points, so a probe's cost "
                            "follows its texels, not the cloud (default %(default)s; 0: splat every point)")
@@ -312,7 +313,7 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--mode", choices=["auto", "nearest", "grid"], default="auto",
                         help="auto: grid walk for grid sets, else nearest probes first")
     render.add_argument("--threads", type=int, default=0, help="cores to use (0: all); same image")
-    render.add_argument("--thickness", type=float, default=defaults.trace("thickness"), help="surface thickness (m)")
+    render.add_argument("--thickness", type=finite_float, default=defaults.trace("thickness"), help="surface thickness (m)")
     add_fidelity_arguments(render)
     render.add_argument("--json", action="store_true", help="print the stats as JSON")
     render.add_argument("--quiet", action="store_true")
@@ -323,24 +324,24 @@ def build_parser() -> argparse.ArgumentParser:
 
     splat = sub.add_parser("splat", help="render the raw cloud as z-buffered splats (baseline)")
     splat.add_argument("--scan", nargs="+", required=True, metavar="FILE", help=SCAN_HELP)
-    splat.add_argument("--scanner", nargs="+", type=float, action="append", metavar="X")
+    splat.add_argument("--scanner", nargs="+", type=finite_float, action="append", metavar="X")
     splat.add_argument("--camera", required=True, metavar="CAM.json")
     splat.add_argument("--out", required=True, metavar="IMG.exr")
     splat.add_argument("--columns", help=COLUMNS_HELP)
     splat.add_argument("--cache", default=None, metavar="DIR")
     splat.add_argument("--no-cache", action="store_true")
-    splat.add_argument("--radius-scale", type=float, default=0.8, help="splat half size / spacing")
-    splat.add_argument("--fixed-radius", type=float, default=0.0, help="splat half size in metres")
+    splat.add_argument("--radius-scale", type=finite_float, default=0.8, help="splat half size / spacing")
+    splat.add_argument("--fixed-radius", type=finite_float, default=0.0, help="splat half size in metres")
     splat.add_argument("--threads", type=int, default=0)
     splat.add_argument("--json", action="store_true")
     splat.add_argument("--quiet", action="store_true")
     splat.set_defaults(run=_cmd_splat)
 
     camera = sub.add_parser("camera", help="write a camera file without Blender")
-    camera.add_argument("--position", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
-    camera.add_argument("--look-at", nargs=3, type=float, required=True, metavar=("X", "Y", "Z"))
+    camera.add_argument("--position", nargs=3, type=finite_float, required=True, metavar=("X", "Y", "Z"))
+    camera.add_argument("--look-at", nargs=3, type=finite_float, required=True, metavar=("X", "Y", "Z"))
     camera.add_argument("--res", nargs=2, type=int, default=[640, 480], metavar=("W", "H"))
-    camera.add_argument("--lens", type=float, default=35.0, help="focal length in mm (36 mm sensor)")
+    camera.add_argument("--lens", type=finite_float, default=35.0, help="focal length in mm (36 mm sensor)")
     camera.add_argument("--type", choices=["PERSP", "PANO_EQUIRECT"], default="PERSP")
     camera.add_argument("--out", required=True, metavar="CAM.json")
     camera.set_defaults(run=_cmd_camera)
@@ -376,7 +377,20 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _print_lfprobe_warning(message, category, filename, lineno, file=None, line=None):
+    """The native jobs' warnings (lfprobe._native.LfprobeWarning: a scan read, but its parse cache
+    not written) as one plain line; other warnings as Python prints them."""
+    if category.__name__ == "LfprobeWarning":
+        print(f"lfprobe: warning: {message}", file=sys.stderr)
+    else:
+        _python_showwarning(message, category, filename, lineno, file, line)
+
+
+_python_showwarning = warnings.showwarning
+
+
 def main(argv: Optional[Sequence[str]] = None) -> int:
+    warnings.showwarning = _print_lfprobe_warning
     args = build_parser().parse_args(argv)
     try:
         return args.run(args)

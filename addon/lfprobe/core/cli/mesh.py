@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 
+from .arguments import finite_float
 from .. import native
 from ..progress import TerminalProgress
 
@@ -57,11 +58,11 @@ def add_parsers(subparsers) -> None:
 
     scan = subparsers.add_parser("scan", help="simulated laser scan of a mesh (.xyz out)")
     scan.add_argument("--mesh", required=True, help="mesh file (.obj with .mtl, or .ply)")
-    scan.add_argument("--at", type=float, nargs=3, required=True, metavar=("X", "Y", "Z"),
+    scan.add_argument("--at", type=finite_float, nargs=3, required=True, metavar=("X", "Y", "Z"),
                       help="scanner position (world)")
-    scan.add_argument("--step-deg", type=float, default=0.5, help="angular step (degrees)")
-    scan.add_argument("--noise-mm", type=float, default=2.0, help="range noise σ at 10 m (mm)")
-    scan.add_argument("--vertical-fov", type=float, default=300.0,
+    scan.add_argument("--step-deg", type=finite_float, default=0.5, help="angular step (degrees)")
+    scan.add_argument("--noise-mm", type=finite_float, default=2.0, help="range noise σ at 10 m (mm)")
+    scan.add_argument("--vertical-fov", type=finite_float, default=300.0,
                       help="vertical field of view (degrees; 300: elevation −60° to +90°)")
     scan.add_argument("--seed", type=int, default=1, help="noise seed")
     scan.add_argument("--out", required=True, help="output .xyz file")

@@ -12,7 +12,7 @@ from collections import Counter
 from ..atomic_write import atomic_open
 from ..pipeline import ProbePlacementSpec, load_scans, plan_probes
 from ..progress import TerminalProgress
-from .arguments import (COLUMNS_HELP, SCAN_HELP, add_placement_arguments, add_plan_arguments, add_storage_arguments,
+from .arguments import (finite_float, COLUMNS_HELP, SCAN_HELP, add_placement_arguments, add_plan_arguments, add_storage_arguments,
                         bake_storage, plan_options, triples)
 
 
@@ -158,10 +158,10 @@ def add_parsers(sub) -> None:
     adaptive.add_argument("--views", nargs="+", metavar="CAM.json",
                           help="camera files of the views or camera path to serve (./lfprobe camera "
                                "writes them); turns on adaptive placement")
-    adaptive.add_argument("--target-unknown", type=float, default=0.01, metavar="F",
+    adaptive.add_argument("--target-unknown", type=finite_float, default=0.01, metavar="F",
                           help="stop when every view has at most this fraction of UNKNOWN pixels "
                                "(default 0.01)")
-    adaptive.add_argument("--budget-mib", type=float, default=None, metavar="M",
+    adaptive.add_argument("--budget-mib", type=finite_float, default=None, metavar="M",
                           help="memory budget of the whole set, loaded maps and coarse levels (MiB); "
                                "no probe is added that would exceed it")
     adaptive.add_argument("--out-probes", metavar="DIR", help="the probe set written (base + added)")
