@@ -63,7 +63,8 @@ run_one() {
   log="$work/$h.log"
   local limit=(-max_total_time="$seconds")
   [ -n "$runs" ] && limit=(-runs="$runs")
-  local result=ok
+  local result=ok started
+  started="$(date +%s)"
   # The limits make a runaway allocation or a hang a finding instead of a stalled machine.
   ASAN_OPTIONS="detect_leaks=1:abort_on_error=1" \
   UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1" \
@@ -71,15 +72,18 @@ run_one() {
     -print_final_stats=1 -artifact_prefix="$build/crashes/${h}-" "$corpus" "$seeds/${h}_fuzzer" \
     >"$log" 2>&1 || result=crash
   local execs secs inputs
+  # After a crash libFuzzer prints no final stats: the last status line has the count.
   execs="$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)"
-  secs="$(sed -n 's/^Done [0-9]* runs in \([0-9]*\) second.*/\1/p' "$log" | tail -1)"
+  [ -n "$execs" ] || execs="$(sed -n 's/^#\([0-9]*\).*/\1/p' "$log" | tail -1)"
+  secs=$(( $(date +%s) - started ))
   inputs="$(find "$corpus" -type f | wc -l)"
   echo "$(date -u +%FT%TZ),$h,${execs:-0},${secs:-0},$inputs,$result" >>"$build/fuzz_runs.csv"
   if [ "$result" = ok ]; then
     printf '%-11s %10s executions in %5ss (%s/s), corpus %s inputs\n' "$h" "${execs:-?}" \
       "${secs:-?}" "$(( ${execs:-0} / (${secs:-1} > 0 ? ${secs:-1} : 1) ))" "$inputs"
   else
-    echo "$h: CRASH (input saved in $build/crashes/); the end of its log:" >&2
+    cp "$log" "$build/crashes/$h.log"
+    echo "$h: CRASH (input and log saved in $build/crashes/); the end of its log:" >&2
     grep -v '^#' "$log" | tail -40 >&2
     return 1
   fi
