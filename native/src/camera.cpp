@@ -28,6 +28,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/input_limits.hpp"
 #include "lfprobe/json_input.hpp"
 
 namespace lfprobe {
@@ -213,9 +214,11 @@ Camera Camera::from_json(const json& j, const std::string& where) {
         c.width = r[0].get<int>();
         c.height = r[1].get<int>();
         // An image holds 41 bytes a pixel in memory: the bound keeps one under 3 GB.
-        if (static_cast<long long>(c.width) * c.height > kMaxCameraPixels) {
+        if (static_cast<long long>(c.width) * c.height > input_limit(InputLimit::CameraPixels)) {
             bad_key(where, "resolution",
-                    "at most " + std::to_string(kMaxCameraPixels) + " pixels (8192 × 8192)", r);
+                    "pixels " + input_limit_hint(InputLimit::CameraPixels) +
+                        " (default 8192 × 8192)",
+                    r);
         }
     }
     c.lens = read_positive(j, "lens", c.lens, where);

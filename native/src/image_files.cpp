@@ -15,6 +15,7 @@
 #include <stb_image.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/input_limits.hpp"
 
 namespace lfprobe {
 
@@ -39,10 +40,10 @@ ExrChannels read_exr_channels(const std::string& path) {
         const Imath::Box2i display = file.header(0).displayWindow();
         const long long width = static_cast<long long>(display.max.x) - display.min.x + 1;
         const long long height = static_cast<long long>(display.max.y) - display.min.y + 1;
-        if (width <= 0 || height <= 0 || width * height > kMaxImagePixels) {
+        if (width <= 0 || height <= 0 || width * height > input_limit(InputLimit::ImagePixels)) {
             throw InputError(path + ": an EXR display window of " + std::to_string(width) + " × " +
-                             std::to_string(height) + " pixels (at most " +
-                             std::to_string(kMaxImagePixels) + " are read)");
+                             std::to_string(height) + " pixels (" +
+                             input_limit_hint(InputLimit::ImagePixels) + ")");
         }
         out.width = static_cast<int>(width);
         out.height = static_cast<int>(height);
@@ -64,7 +65,8 @@ ExrChannels read_exr_channels(const std::string& path) {
             // Read over the data window into a buffer of its own, then copy what is shown.
             const long long data_width = static_cast<long long>(data.max.x) - data.min.x + 1;
             const long long data_height = static_cast<long long>(data.max.y) - data.min.y + 1;
-            if (data_width <= 0 || data_height <= 0 || data_width * data_height > kMaxImagePixels) {
+            if (data_width <= 0 || data_height <= 0 ||
+                data_width * data_height > input_limit(InputLimit::ImagePixels)) {
                 throw InputError(path + ": an EXR data window of " + std::to_string(data_width) +
                                  " × " + std::to_string(data_height) + " pixels");
             }
@@ -118,10 +120,11 @@ StoredImage read_stored_image(const std::string& path) {
                          (reason != nullptr ? reason : "unknown format") + ")");
     }
     if (width <= 0 || height <= 0 ||
-        static_cast<long long>(width) * static_cast<long long>(height) > kMaxImagePixels) {
+        static_cast<long long>(width) * static_cast<long long>(height) >
+            input_limit(InputLimit::ImagePixels)) {
         throw InputError(path + ": an image of " + std::to_string(width) + " × " +
-                         std::to_string(height) + " pixels (at most " +
-                         std::to_string(kMaxImagePixels) + " are read)");
+                         std::to_string(height) + " pixels (" +
+                         input_limit_hint(InputLimit::ImagePixels) + ")");
     }
     StoredImage image;
     // stb_image's 8- and 16-bit loaders differ only in their sample type.

@@ -12,6 +12,7 @@
 #include <fast_float/fast_float.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/input_limits.hpp"
 #include "text_words.hpp"
 
 namespace lfprobe {
@@ -52,10 +53,7 @@ std::optional<long long> parse_int(std::string_view s) {
 // Reads a whole text file that must be a regular file (a FIFO would block, /dev/zero never
 // end) of at most `max_bytes`.
 // A material library is a few kilobytes; an OBJ of tens of millions of triangles is a few GB.
-constexpr std::uintmax_t kMaxMaterialLibraryBytes = std::uintmax_t{64} << 20;
-constexpr std::uintmax_t kMaxObjBytes = std::uintmax_t{8} << 30;
-
-std::string read_text(const std::string& path, const char* what, std::uintmax_t max_bytes) {
+std::string read_text(const std::string& path, const char* what, InputLimit limit) {
     std::error_code ec;
     if (!std::filesystem::is_regular_file(path, ec)) {
         throw MissingFileError(
@@ -63,9 +61,9 @@ std::string read_text(const std::string& path, const char* what, std::uintmax_t 
             (std::filesystem::exists(path, ec) ? " (not a regular file)" : " (no such file)"));
     }
     const std::uintmax_t size = std::filesystem::file_size(path, ec);
-    if (!ec && size > max_bytes) {
-        throw InputError(path + ": the " + what + " is " + std::to_string(size) +
-                         " bytes, more than the " + std::to_string(max_bytes) + " accepted");
+    if (!ec && size > static_cast<std::uintmax_t>(input_limit(limit))) {
+        throw InputError(path + ": the " + what + " is " + std::to_string(size) + " bytes; " +
+                         input_limit_hint(limit) + " bytes");
     }
     std::ifstream in(path, std::ios::binary);
     if (!in) {
@@ -123,7 +121,8 @@ glm::vec3 read_vec3(const std::vector<std::string_view>& tokens, std::size_t fir
 void read_mtl(const std::string& path, std::vector<Material>& materials,
               std::map<std::string, std::uint32_t>& by_name,
               std::map<std::string, std::shared_ptr<const Texture>>& textures) {
-    const std::string text = read_text(path, "material library (mtllib)", kMaxMaterialLibraryBytes);
+    const std::string text =
+        read_text(path, "material library (mtllib)", InputLimit::MaterialLibraryBytes);
     const fs::path folder = fs::path(path).parent_path();
     Material* current = nullptr;
     for_each_line(text, [&](std::uint64_t line, const std::vector<std::string_view>& t) {
@@ -207,7 +206,7 @@ std::int64_t resolve_index(std::string_view token, std::size_t count, const File
 } // namespace
 
 Mesh read_obj(const std::string& path) {
-    const std::string text = read_text(path, "OBJ mesh", kMaxObjBytes);
+    const std::string text = read_text(path, "OBJ mesh", InputLimit::ObjBytes);
     const fs::path folder = fs::path(path).parent_path();
     Mesh mesh;
     mesh.path = path;

@@ -11,6 +11,7 @@
 
 #include "lfprobe/color.hpp"
 #include "lfprobe/error.hpp"
+#include "lfprobe/input_limits.hpp"
 
 namespace lfprobe {
 
@@ -71,10 +72,10 @@ Texture Texture::load(const std::string& path) {
     // The size from the header before any pixel is decoded: a small PNG can declare 16384²
     // pixels, 3 GB once decoded to linear floats.
     if (stbi_info(path.c_str(), &w, &h, &channels) != 0 &&
-        static_cast<long long>(w) * h > kMaxTexturePixels) {
+        static_cast<long long>(w) * h > input_limit(InputLimit::TexturePixels)) {
         throw InputError(path + ": the texture is " + std::to_string(w) + " × " +
-                         std::to_string(h) + " pixels, more than the " +
-                         std::to_string(kMaxTexturePixels) + " (8192 × 8192) accepted");
+                         std::to_string(h) + " pixels; textures of " +
+                         input_limit_hint(InputLimit::TexturePixels) + " (default 8192 × 8192)");
     }
     // Always ask for 3 channels: only the base colour is used, alpha is ignored.
     std::unique_ptr<stbi_uc, void (*)(void*)> pixels(stbi_load(path.c_str(), &w, &h, &channels, 3),

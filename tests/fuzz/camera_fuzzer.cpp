@@ -10,6 +10,7 @@
 #include "fuzz_support.hpp"
 #include "lfprobe/camera.hpp"
 #include "lfprobe/error.hpp"
+#include "lfprobe/input_limits.hpp"
 #include "lfprobe/render.hpp"
 #include "trace_scenes.hpp"
 
@@ -50,7 +51,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         return 0;
     }
     fuzz::expect(camera.width >= 1 && camera.height >= 1 &&
-                     static_cast<long long>(camera.width) * camera.height <= kMaxCameraPixels,
+                     static_cast<long long>(camera.width) * camera.height <=
+                         input_limit(InputLimit::CameraPixels),
                  "an accepted camera's resolution is outside its limits");
     // Every pixel of an accepted camera has a finite ray; sampled on a grid of at most 32×32
     // pixels, corners and edges included, for large images.

@@ -26,9 +26,8 @@ enum class CameraType {
 
 enum class SensorFit { Auto, Horizontal, Vertical };
 
-// The most pixels a camera file may ask for (8192 × 8192): a rendered image takes 41 bytes a
-// pixel in memory.
-inline constexpr long long kMaxCameraPixels = 8192LL * 8192LL;
+// The most pixels a camera file may ask for: input_limits.hpp (8192 × 8192 by default; a
+// rendered image takes 41 bytes a pixel in memory).
 
 struct Camera {
     // Defaults are Blender's (DNA_camera_defaults.h: lens 50, sensor 36 × 24, clip 0.1 / 1000,

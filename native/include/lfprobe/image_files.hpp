@@ -21,7 +21,8 @@ struct ExrChannels {
 };
 
 // MissingFileError when there is no such file; InputError naming the file when it is not an
-// EXR OpenEXR can read, holds deep data, or is larger than kMaxImagePixels.
+// EXR OpenEXR can read, holds deep data, or is larger than the image pixel limit
+// (input_limits.hpp).
 [[nodiscard]] ExrChannels read_exr_channels(const std::string& path);
 
 // A PNG's or JPEG's pixels as stored (sRGB codes, 0 to 2^bits - 1), 1 (grey), 2 (grey, alpha),
@@ -35,10 +36,9 @@ struct StoredImage {
 };
 
 // MissingFileError when there is no such file; InputError naming the file (and stb_image's
-// reason) when it cannot be decoded or is larger than kMaxImagePixels.
+// reason) when it cannot be decoded or is larger than the image pixel limit (input_limits.hpp).
 [[nodiscard]] StoredImage read_stored_image(const std::string& path);
 
-// The most pixels an image read for comparison may hold (a camera's own limit, 8192²).
-inline constexpr long long kMaxImagePixels = 8192LL * 8192LL;
+// The most pixels an image read for comparison may hold: input_limits.hpp (8192² by default).
 
 } // namespace lfprobe

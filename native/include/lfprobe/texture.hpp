@@ -11,8 +11,8 @@
 
 namespace lfprobe {
 
-// The largest texture accepted, in pixels (8192 × 8192: 805 MB as linear floats).
-inline constexpr long long kMaxTexturePixels = 8192LL * 8192LL;
+// The largest texture accepted: input_limits.hpp (8192 × 8192 pixels by default, 805 MB as
+// linear floats).
 
 struct Texture {
     std::string path;
