@@ -115,10 +115,12 @@ def _wall_scan(path, pitch):
     return path
 
 
-def test_killed_rebake_leaves_the_earlier_set_as_it_was(native, tmp_path):
-    """SIGKILL in the middle of a bake over an earlier set: the earlier set is untouched (the new
-    one is staged in SET.partial and swapped in only when complete), the staging folder holds
-    only complete probe files, and the next bake clears it."""
+@pytest.mark.parametrize("moment", ["staging opened", "writing probes"])
+def test_killed_rebake_leaves_the_earlier_set_as_it_was(native, tmp_path, moment):
+    """SIGKILL at two moments of a bake over an earlier set (as its staging folder appears; after
+    some probes were written): the earlier set is untouched (the new one is staged in
+    SET.partial and swapped in only when complete), the staging folder holds only complete probe
+    files, and the next bake clears it."""
     scan = _wall_scan(tmp_path / "room.xyz", 0.02)
     out = tmp_path / "set"
     run_cli("bake", "--scan", scan, "--probe", 0, 0, 1, 0.5, 0, 1, "--res", 16, "--out", out,
@@ -131,13 +133,15 @@ def test_killed_rebake_leaves_the_earlier_set_as_it_was(native, tmp_path):
          "--res", "512", "--out", str(out), "--no-cache", "--quiet"],
         stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     deadline = time.time() + 120
-    while not (staging / "probe_00002.exr").exists() and time.time() < deadline:
-        time.sleep(0.01)
+    waited_for = staging if moment == "staging opened" else staging / "probe_00002.exr"
+    while not waited_for.exists() and time.time() < deadline:
+        time.sleep(0.005)
     process.send_signal(signal.SIGKILL)
     process.wait()
     assert {p.name: p.read_bytes() for p in out.iterdir()} == earlier
     complete = sorted(staging.glob("probe_?????.exr"))
-    assert complete, "the bake should have written some probes before the kill"
+    if moment == "writing probes":
+        assert complete, "the bake should have written some probes before the kill"
     for path in complete:
         assert native.read_probe(str(path))["resolution"] == 512
     run_cli("bake", "--scan", scan, "--probe", 0, 0, 1, "--res", 16, "--out", out, "--no-cache",
