@@ -7,6 +7,7 @@ same interface, on a thread of its own."""
 from __future__ import annotations
 
 import threading
+import warnings
 
 import bpy
 
@@ -128,7 +129,14 @@ class NativeJobOperator:
         self._job = None
         outcome = {"CANCELLED"}
         try:
-            outcome = self.finish_job(context, fetch_result())
+            # What the work warned of (a parse cache that could not be written) goes to the
+            # status bar and the Info log, as Blender shows an operator's warnings.
+            with warnings.catch_warnings(record=True) as heard:
+                warnings.simplefilter("always", _native.LfprobeWarning)
+                result = fetch_result()
+            for warning in heard:
+                self.report({"WARNING"}, f"{self.job_label}: {warning.message}")
+            outcome = self.finish_job(context, result)
         except _native.Cancelled:
             self.report({"WARNING"}, f"{self.job_label}: cancelled")
         except (_native.InputError, _native.NativeIOError, OSError, ValueError, RuntimeError) as error:
