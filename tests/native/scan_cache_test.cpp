@@ -154,16 +154,29 @@ TEST(CacheScan, ChangedFileOrOptionsMiss) {
     EXPECT_TRUE(hit);
 }
 
-TEST(CacheScan, DamagedEntriesAreIgnoredAndRewritten) {
-    const fs::path dir = fresh_dir("corrupt");
-    const fs::path cache = dir / "cache";
-    const fs::path path = dir / "scan.xyz";
-    write_file(path, every_channel);
+// A scan of every channel read once through a fresh cache: its folder, the parse, the entry.
+struct CachedScan {
+    fs::path cache;
+    fs::path path;
+    ScanFile reference;
+    fs::path entry;
+};
+
+CachedScan cached_scan(const std::string& name) {
+    const fs::path dir = fresh_dir(name);
+    CachedScan c{dir / "cache", dir / "scan.xyz", {}, {}};
+    write_file(c.path, every_channel);
     bool hit = false;
-    const ScanFile reference = cached(path, cache, hit);
-    const std::vector<fs::path> entries = files_in(cache);
-    ASSERT_EQ(entries.size(), 1u);
-    const fs::path entry = entries[0];
+    c.reference = cached(c.path, c.cache, hit);
+    const std::vector<fs::path> entries = files_in(c.cache);
+    EXPECT_EQ(entries.size(), 1u);
+    c.entry = entries.at(0);
+    return c;
+}
+
+TEST(CacheScan, DamagedEntriesAreIgnoredAndRewritten) {
+    const auto [cache, path, reference, entry] = cached_scan("corrupt");
+    bool hit = false;
     const auto size = fs::file_size(entry);
 
     auto damage_and_check = [&](const std::string& what, auto damage) {
@@ -206,13 +219,8 @@ TEST(CacheScan, DamagedEntriesAreIgnoredAndRewritten) {
 // Found by the cache's fuzz harness (tests/fuzz/scan_cache_fuzzer.cpp): an entry whose checksum
 // matches but whose values no reader returns (a faulty or foreign writer) is parsed again too.
 TEST(CacheScan, ChecksummedEntriesWithNonFiniteValuesAreParsedAgain) {
-    const fs::path dir = fresh_dir("foreign");
-    const fs::path cache = dir / "cache";
-    const fs::path path = dir / "scan.xyz";
-    write_file(path, every_channel);
+    const auto [cache, path, reference, entry] = cached_scan("foreign");
     bool hit = false;
-    const ScanFile reference = cached(path, cache, hit);
-    const fs::path entry = files_in(cache).at(0);
     std::string bytes;
     {
         std::ifstream in(entry, std::ios::binary);
