@@ -72,13 +72,16 @@ MappedFile::MappedFile(const std::string& path) : path_(path) {
     data_ = static_cast<const char*>(mapping);
 }
 
+MappedFile::MappedFile(std::string name, std::string_view bytes)
+    : path_(std::move(name)), data_(bytes.data()), size_(bytes.size()), owned_(false) {}
+
 MappedFile::~MappedFile() {
     unmap();
 }
 
 MappedFile::MappedFile(MappedFile&& other) noexcept
     : path_(std::move(other.path_)), data_(std::exchange(other.data_, nullptr)),
-      size_(std::exchange(other.size_, 0)) {}
+      size_(std::exchange(other.size_, 0)), owned_(other.owned_) {}
 
 MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
     if (this != &other) {
@@ -86,16 +89,17 @@ MappedFile& MappedFile::operator=(MappedFile&& other) noexcept {
         path_ = std::move(other.path_);
         data_ = std::exchange(other.data_, nullptr);
         size_ = std::exchange(other.size_, 0);
+        owned_ = other.owned_;
     }
     return *this;
 }
 
 void MappedFile::unmap() noexcept {
-    if (data_ != nullptr) {
+    if (data_ != nullptr && owned_) {
         ::munmap(const_cast<char*>(data_), size_);
-        data_ = nullptr;
-        size_ = 0;
     }
+    data_ = nullptr;
+    size_ = 0;
 }
 
 } // namespace lfprobe

@@ -141,10 +141,8 @@ int find_property(const detail::PlyElement& e, std::initializer_list<const char*
     return -1;
 }
 
-} // namespace
-
-Mesh read_ply_mesh(const std::string& path) {
-    const MappedFile file(path);
+[[nodiscard]] Mesh read_ply_mesh_from(const MappedFile& file) {
+    const std::string& path = file.path();
     const PlyHeader header = detail::parse_ply_header(file);
     Mesh mesh;
     mesh.path = path;
@@ -272,6 +270,16 @@ Mesh read_ply_mesh(const std::string& path) {
                                 "point cloud is a scan, not a mesh)");
     }
     return mesh;
+}
+
+} // namespace
+
+Mesh read_ply_mesh(const std::string& path) {
+    return read_ply_mesh_from(MappedFile(path));
+}
+
+Mesh read_ply_mesh_bytes(const std::string& name, std::string_view bytes) {
+    return read_ply_mesh_from(MappedFile(name, bytes));
 }
 
 } // namespace lfprobe

@@ -90,15 +90,20 @@ ScanFormat scan_format_from_path(const std::string& path) {
     return ScanFormat::Auto; // unknown: the caller must name the format
 }
 
-ScanFile read_scan_file(const std::string& path, const ScanReadOptions& options,
-                        Progress* progress) {
+namespace {
+
+[[nodiscard]] ScanFormat format_to_read(const std::string& path, const ScanReadOptions& options) {
     const ScanFormat format =
         options.format == ScanFormat::Auto ? scan_format_from_path(path) : options.format;
     if (format == ScanFormat::Auto) {
         throw InputError(path + ": cannot tell the scan format from the file name: expected "
                                 ".xyz, .txt, .asc, .csv, .pts or .ply, or a format in the options");
     }
-    const MappedFile file(path);
+    return format;
+}
+
+[[nodiscard]] ScanFile read_scan(const MappedFile& file, ScanFormat format,
+                                 const ScanReadOptions& options, Progress* progress) {
     switch (format) {
     case ScanFormat::Pts:
         return detail::read_pts_scan(file, options.columns, progress);
@@ -107,6 +112,20 @@ ScanFile read_scan_file(const std::string& path, const ScanReadOptions& options,
     default:
         return detail::read_xyz_scan(file, options.columns, progress);
     }
+}
+
+} // namespace
+
+ScanFile read_scan_file(const std::string& path, const ScanReadOptions& options,
+                        Progress* progress) {
+    const ScanFormat format = format_to_read(path, options);
+    return read_scan(MappedFile(path), format, options, progress);
+}
+
+ScanFile read_scan_bytes(const std::string& name, std::string_view bytes,
+                         const ScanReadOptions& options, Progress* progress) {
+    const ScanFormat format = format_to_read(name, options);
+    return read_scan(MappedFile(name, bytes), format, options, progress);
 }
 
 PointCloud merge_scans(std::vector<ScanFile> files, const MergeOptions& options) {

@@ -11,15 +11,15 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     using namespace lfprobe;
-    const std::string path = fuzz::write_scratch_file(
-        "cloud.ply", std::string_view(reinterpret_cast<const char*>(data), size));
+    // From memory, as the file's mapping would be (see text_scan_fuzzer.cpp).
+    const std::string_view bytes(reinterpret_cast<const char*>(data), size);
     try {
-        fuzz::check_scan(read_scan_file(path, ScanReadOptions{}));
+        fuzz::check_scan(read_scan_bytes("cloud.ply", bytes, ScanReadOptions{}));
     } catch (const InputError&) {
     } catch (const IoError&) {
     }
     try {
-        fuzz::check_mesh(read_ply_mesh(path));
+        fuzz::check_mesh(read_ply_mesh_bytes("cloud.ply", bytes));
     } catch (const InputError&) {
     } catch (const IoError&) {
     }

@@ -13,6 +13,9 @@ public:
     // Maps `path` read-only. An empty file maps to an empty view. Throws IoError naming the
     // path and the system's reason when the file cannot be opened or mapped.
     explicit MappedFile(const std::string& path);
+    // A view of `bytes` already in memory, which the caller keeps alive, named `name` in errors:
+    // the readers parse a buffer exactly as a file (the fuzz harnesses, data from memory).
+    MappedFile(std::string name, std::string_view bytes);
     ~MappedFile();
 
     MappedFile(const MappedFile&) = delete;
@@ -31,6 +34,7 @@ private:
     std::string path_;
     const char* data_ = nullptr;
     std::size_t size_ = 0;
+    bool owned_ = true; // a mapping to unmap, not a borrowed view
 };
 
 } // namespace lfprobe

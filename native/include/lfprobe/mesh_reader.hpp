@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <string_view>
 
 #include "lfprobe/mesh.hpp"
 
@@ -17,6 +18,8 @@ namespace lfprobe {
 // s t or u v (texture_u/texture_v too); element face with a vertex_indices (or vertex_index)
 // list, fan-triangulated. One object, one material (white, or the vertex colours).
 [[nodiscard]] Mesh read_ply_mesh(const std::string& path);
+// The same for a PLY's bytes already in memory, `name` standing for the file in errors.
+[[nodiscard]] Mesh read_ply_mesh_bytes(const std::string& name, std::string_view bytes);
 
 // By extension: .obj or .ply. Throws InputError for other extensions.
 [[nodiscard]] Mesh read_mesh(const std::string& path);

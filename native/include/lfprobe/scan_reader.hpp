@@ -6,6 +6,7 @@
 
 #include <cstdint>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -46,6 +47,11 @@ struct ScanFile {
 // expected; IoError when the file cannot be opened; Cancelled when progress asks to stop.
 [[nodiscard]] ScanFile read_scan_file(const std::string& path, const ScanReadOptions& options,
                                       Progress* progress = nullptr);
+// The same for a file's bytes already in memory: `name` picks the format by its extension (unless
+// the options name one) and stands for the file in errors.
+[[nodiscard]] ScanFile read_scan_bytes(const std::string& name, std::string_view bytes,
+                                       const ScanReadOptions& options,
+                                       Progress* progress = nullptr);
 
 struct MergeOptions {
     // Subtracted from world coordinates before they become float32. When not forced, it is 0
