@@ -71,6 +71,15 @@ def test_info_refuses_the_manifests_render_refuses(baked_set, name, change, expe
     assert expected in result.stderr
 
 
+def test_info_refuses_a_manifest_nested_200000_deep(baked_set):
+    path = baked_set / "manifest.json"
+    text = path.read_text().replace('"bake": {', '"bake": ' + "[" * 200_000 + "]" * 200_000 + ', "x": {', 1)
+    path.write_text(text)
+    result = run_cli("info", baked_set)
+    _assert_bad_input(result, "manifest.json")
+    assert "nested" in result.stderr
+
+
 def test_a_fifo_named_as_scan_exits_2_without_waiting_for_a_writer(tmp_path):
     fifo = tmp_path / "scan.xyz"
     os.mkfifo(fifo)

@@ -24,6 +24,10 @@ def read_manifest(folder: str) -> dict:
             manifest = json.load(stream)
         except json.JSONDecodeError as error:
             raise ValueError(f"{path}: invalid JSON: {error}") from error
+        except RecursionError:
+            # Python's own parser gives up first on JSON nested thousands deep; the native reader
+            # refuses anything past 64.
+            raise ValueError(f"{path}: JSON nested too deep (a manifest nests a few levels)") from None
     if manifest.get("format") != "lfprobe-probe-set":
         raise ValueError(f'{path}: not an lfprobe probe set (expected "format": "lfprobe-probe-set")')
     _check_as_a_render_would(folder)
