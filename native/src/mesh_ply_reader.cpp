@@ -193,13 +193,23 @@ int find_property(const detail::PlyElement& e, std::initializer_list<const char*
                     continue;
                 }
                 const double count = reader.read(prop.count_type);
-                if (count < 0.0 || count > 1.0e6) {
+                // Negated so that NaN is refused too: a cast of NaN to int is undefined.
+                if (!(count >= 0.0 && count <= 1.0e6)) {
                     throw input_error_at(reader.where(),
                                          "expected a list length, got " + std::to_string(count));
                 }
                 for (int k = 0; k < static_cast<int>(count); ++k) {
                     const double v = reader.read(prop.type);
                     if (static_cast<int>(p) == list_index) {
+                        // Read as a double whatever the file's type: checked before the cast,
+                        // which is undefined for NaN or a value an int64 cannot hold (1.8e19
+                        // in a damaged file).
+                        if (!(v >= 0.0 && v < 4294967296.0)) {
+                            throw input_error_at(reader.where(),
+                                                 "expected a vertex index from 0 to 2^32 - 1, "
+                                                 "got " +
+                                                     std::to_string(v));
+                        }
                         face.push_back(static_cast<std::int64_t>(v));
                     }
                 }

@@ -160,6 +160,13 @@ private:
                                                  " has a negative list length for '" +
                                                  property.name + "'");
             }
+            // NaN, or more items than any file holds: refused before the cast to size_t, which
+            // is undefined for them. A length short of that is checked against the file below.
+            if (!(count <= 1.0e15)) {
+                throw at_byte(offset + size, element.name + " " + std::to_string(item) +
+                                                 " has a list length of " + std::to_string(count) +
+                                                 " for '" + property.name + "'");
+            }
             size += count_size;
             const std::size_t list_bytes =
                 static_cast<std::size_t>(count) * ply_type_size(property.type);
@@ -301,6 +308,10 @@ private:
                 if (property.is_list) {
                     const double length =
                         load_value(file_.data() + field, property.count_type, swap_);
+                    if (!(length >= 0.0 && length <= 1.0e15)) {
+                        throw at_byte(field, "vertex " + std::to_string(i) +
+                                                 " has a list length of " + std::to_string(length));
+                    }
                     field += ply_type_size(property.count_type) +
                              static_cast<std::size_t>(length) * ply_type_size(property.type);
                     continue;

@@ -6,12 +6,16 @@
 #include <fstream>
 #include <string>
 
+#include <limits>
+#include <utility>
+
 #include <gtest/gtest.h>
 #include <sys/stat.h>
 
 #include "lfprobe/color.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/mesh_reader.hpp"
+#include "lfprobe/scan_reader.hpp"
 #include "lfprobe/texture.hpp"
 #include "test_data.hpp"
 
@@ -200,6 +204,37 @@ TEST(MeshReader, APngChunkLongerThanItsFileIsRefusedBeforeDecoding) {
     std::string twice = png.substr(0, 8 + sizeof ihdr);
     twice.append(reinterpret_cast<const char*>(ihdr), sizeof ihdr);
     EXPECT_THROW((void)Texture::load(temp_file("two_headers.png", twice)), InputError);
+}
+
+// Issue 22, item 12: values read as doubles reach no undefined cast. A face index of 1.8e19
+// (was cast to int64 as it was) and a NaN list length are errors naming the file, in the mesh
+// reader and in the scan reader, which skips a vertex's list properties.
+TEST(MeshReader, PlyIndicesAndListLengthsBeyondTheirTypesAreErrors) {
+    const std::string header = "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                               "property float y\nproperty float z\nelement face 1\n";
+    const std::string vertices = "0 0 0\n1 0 0\n0 1 0\n";
+    const std::string huge_index = header +
+                                   "property list uchar double vertex_indices\nend_header\n" +
+                                   vertices + "3 0 1 1.8e19\n";
+    const std::string nan_count =
+        header + "property list float int vertex_indices\nend_header\n" + vertices + "nan 0 1 2\n";
+    for (const auto& [name, text] :
+         {std::pair{"huge_index.ply", huge_index}, std::pair{"nan_count.ply", nan_count}}) {
+        try {
+            (void)read_ply_mesh(temp_file(name, text));
+            ADD_FAILURE() << name << ": accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(name), std::string::npos) << e.what();
+        }
+    }
+    std::string binary = "ply\nformat binary_little_endian 1.0\nelement vertex 1\n"
+                         "property float x\nproperty float y\nproperty float z\n"
+                         "property list float uchar extra\nend_header\n";
+    const float point[3] = {0.0f, 0.0f, 0.0f};
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+    binary.append(reinterpret_cast<const char*>(point), sizeof point);
+    binary.append(reinterpret_cast<const char*>(&nan), sizeof nan);
+    EXPECT_THROW((void)read_scan_bytes("nan_list.ply", binary, ScanReadOptions{}), InputError);
 }
 
 TEST(MeshReader, NonFiniteVertexIsAnError) {
