@@ -1,6 +1,9 @@
-// Hole filling for baked probes: small connected holes are filled from a pull pyramid of the
-// measured texels and marked inferred; large holes stay unknown (docs/DESIGN.md §4).
+// Hole filling for baked probes: narrow connected holes are filled and marked inferred, large
+// holes stay unknown (docs/DESIGN.md §4). A hole where the scans could not see behind a near
+// surface (a disocclusion) continues the surface behind; any other hole is filled from a pull
+// pyramid of the measured texels around it.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -15,9 +18,20 @@ namespace lfprobe {
 namespace {
 
 // Where the spread of distances among the texels a fill draws from exceeds this fraction of
-// the nearest one, the hole sits on a silhouette: the nearest surface fills it, so a far
-// surface never shows through a near one.
+// the nearest one, the hole sits on a silhouette. A pull-push fill then takes the nearest
+// surface, so a far surface never shows through a near one; a disocclusion takes the far one.
 constexpr float kSilhouetteSpread = 0.05f;
+// A hole on a silhouette whose border is at least this much the far surface is a
+// disocclusion, filled from behind (disocclusion_split).
+constexpr float kMinFarBorder = 0.25f;
+// Below this |cos| between a texel's ray and a neighbour's surface plane the plane is too
+// grazing to continue, and the neighbour's own distance is used.
+constexpr float kMinPlaneCosine = 0.05f;
+// fill_from_background's texel tags: outside the hole, in it and not reached yet, queued for
+// the next layer; a filled texel holds its layer (1, 2, ...).
+constexpr std::int32_t kOutside = std::numeric_limits<std::int32_t>::max();
+constexpr std::int32_t kUnfilled = kOutside - 1;
+constexpr std::int32_t kQueued = kOutside - 2;
 
 struct PullLevel {
     int n = 0;
@@ -44,72 +58,228 @@ struct PullLevel {
     }
 };
 
-// Connected (4-neighbour) components of unknown texels whose bounding box fits in
-// `max_extent` × `max_extent`; returns a mask of the texels to fill.
-std::vector<std::uint8_t> small_hole_mask(const ProbeMap& map, int max_extent) {
+// Calls visit(u) for each of texel t's 8 neighbours inside the map, in a fixed order.
+template <class Visit>
+void for_each_neighbour(std::uint32_t t, int n, Visit&& visit) {
+    const int x = static_cast<int>(t % static_cast<std::uint32_t>(n));
+    const int y = static_cast<int>(t / static_cast<std::uint32_t>(n));
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int ux = x + dx;
+            const int uy = y + dy;
+            if ((dx == 0 && dy == 0) || ux < 0 || uy < 0 || ux >= n || uy >= n) {
+                continue;
+            }
+            visit(static_cast<std::uint32_t>(uy * n + ux));
+        }
+    }
+}
+
+// Connected (8-neighbour) components of unknown texels that are at most `max_width` texels
+// across: no texel of one lies more than ceil(max_width / 2) steps (8-neighbour) from the
+// measured surface around it. Width, not the bounding box: a long thin crack (the strip under a
+// shelf's lip that no scanner saw) is as fillable as a short one. Each is its texels in the
+// order they were found.
+std::vector<std::vector<std::uint32_t>> small_holes(const ProbeMap& map, int max_width) {
     const int n = map.resolution;
     const std::size_t count = map.texel_count();
-    std::vector<std::uint8_t> fill(count, 0);
+    const int max_depth = (max_width + 1) / 2;
+    std::vector<std::vector<std::uint32_t>> holes;
     std::vector<std::uint8_t> seen(count, 0);
+    std::vector<std::int32_t> depth(count, 0);
     std::vector<std::uint32_t> stack;
     std::vector<std::uint32_t> component;
+    std::vector<std::uint32_t> frontier;
+    std::vector<std::uint32_t> next;
     for (std::size_t start = 0; start < count; ++start) {
         if (seen[start] || map.state(start) != TexelState::Unknown) {
             continue;
         }
-        int min_x = n, min_y = n, max_x = -1, max_y = -1;
-        bool too_big = false;
         component.clear();
         stack.assign(1, static_cast<std::uint32_t>(start));
         seen[start] = 1;
         while (!stack.empty()) {
             const std::uint32_t t = stack.back();
             stack.pop_back();
-            const int x = static_cast<int>(t % static_cast<std::uint32_t>(n));
-            const int y = static_cast<int>(t / static_cast<std::uint32_t>(n));
-            min_x = std::min(min_x, x);
-            max_x = std::max(max_x, x);
-            min_y = std::min(min_y, y);
-            max_y = std::max(max_y, y);
-            too_big = too_big || max_x - min_x >= max_extent || max_y - min_y >= max_extent;
-            if (!too_big) {
-                component.push_back(t);
-            }
-            const int nx[4] = {x - 1, x + 1, x, x};
-            const int ny[4] = {y, y, y - 1, y + 1};
-            for (int k = 0; k < 4; ++k) {
-                if (nx[k] < 0 || ny[k] < 0 || nx[k] >= n || ny[k] >= n) {
-                    continue;
-                }
-                const std::size_t u =
-                    static_cast<std::size_t>(ny[k]) * static_cast<std::size_t>(n) +
-                    static_cast<std::size_t>(nx[k]);
+            component.push_back(t);
+            for_each_neighbour(t, n, [&](std::uint32_t u) {
                 if (!seen[u] && map.state(u) == TexelState::Unknown) {
                     seen[u] = 1;
-                    stack.push_back(static_cast<std::uint32_t>(u));
+                    stack.push_back(u);
                 }
+            });
+        }
+        // Steps from the measured surface, breadth first, given up past max_depth.
+        frontier.clear();
+        for (const std::uint32_t t : component) {
+            bool on_border = false;
+            for_each_neighbour(t, n, [&](std::uint32_t u) {
+                on_border = on_border || map.state(u) == TexelState::Surface;
+            });
+            depth[t] = on_border ? 1 : 0;
+            if (on_border) {
+                frontier.push_back(t);
             }
         }
-        if (!too_big) {
-            for (const std::uint32_t t : component) {
-                fill[t] = 1;
+        std::size_t reached = frontier.size();
+        for (int d = 2; d <= max_depth && !frontier.empty(); ++d) {
+            next.clear();
+            for (const std::uint32_t t : frontier) {
+                for_each_neighbour(t, n, [&](std::uint32_t u) {
+                    if (depth[u] == 0 && map.state(u) == TexelState::Unknown) {
+                        depth[u] = d;
+                        next.push_back(u);
+                    }
+                });
             }
+            reached += next.size();
+            frontier.swap(next);
+        }
+        for (const std::uint32_t t : component) {
+            depth[t] = 0;
+        }
+        if (reached == component.size()) {
+            holes.push_back(component);
         }
     }
-    return fill;
+    return holes;
 }
 
-} // namespace
-
-void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
-    if (hole_fill_texels <= 0) {
-        return;
-    }
+// The measured surface a disocclusion hole shows, when it is one: the distance beyond which
+// its border's texels count as the background. A hole whose border holds a near and a far
+// surface (a spread over kSilhouetteSpread) and whose far part is at least kMinFarBorder of
+// the border lies where the scans could not see behind the near surface (a scanner's shadow,
+// seen from elsewhere): what is there is the far surface, continued. A hole bordered mostly by
+// the near surface is a gap in that surface (a thin object's missing points): none (0).
+float disocclusion_split(const ProbeMap& map, const std::vector<std::uint32_t>& hole,
+                         const std::vector<std::uint8_t>& measured,
+                         std::vector<std::uint8_t>& in_border) {
     const int n = map.resolution;
-    const std::vector<std::uint8_t> fill = small_hole_mask(map, hole_fill_texels);
-    if (std::find(fill.begin(), fill.end(), 1) == fill.end()) {
-        return;
+    std::vector<std::uint32_t> border;
+    for (const std::uint32_t t : hole) {
+        for_each_neighbour(t, n, [&](std::uint32_t u) {
+            if (measured[u] && !in_border[u]) {
+                in_border[u] = 1;
+                border.push_back(u);
+            }
+        });
     }
+    float near = std::numeric_limits<float>::infinity();
+    float far = 0.0f;
+    for (const std::uint32_t u : border) {
+        in_border[u] = 0;
+        near = std::min(near, map.distance[u]);
+        far = std::max(far, map.distance[u]);
+    }
+    if (border.empty() || !(far - near > kSilhouetteSpread * near)) {
+        return 0.0f;
+    }
+    const float split = 0.5f * (near + far);
+    const auto far_count = static_cast<std::size_t>(std::count_if(
+        border.begin(), border.end(), [&](std::uint32_t u) { return map.distance[u] >= split; }));
+    return static_cast<float>(far_count) >= kMinFarBorder * static_cast<float>(border.size())
+               ? split
+               : 0.0f;
+}
+
+// Fills a disocclusion hole from its background side only, layer by layer inward (onion
+// peeling): a texel takes the mean colour and normal of its neighbours already known (the
+// background border, then earlier layers), and the distance where its ray meets their
+// surface planes, so a plane behind the near surface continues under it. Layer k is inferred
+// with confidence 2^-(1 + floor(log2 k)): as the pull-push's level, halving as the fill
+// reaches twice as far. Reads only texels of earlier layers, so the order is fixed.
+void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole, float split,
+                          const std::vector<std::uint8_t>& measured,
+                          std::vector<std::int32_t>& layer_of) {
+    const int n = map.resolution;
+    for (const std::uint32_t t : hole) {
+        layer_of[t] = kUnfilled;
+    }
+    // A known neighbour for layer `layer`: the background border, or a texel of this hole
+    // filled by an earlier layer.
+    auto known = [&](std::uint32_t u, std::int32_t layer) {
+        return (measured[u] && map.distance[u] >= split) || layer_of[u] < layer;
+    };
+    struct Fill {
+        std::uint32_t t;
+        float distance;
+        glm::vec3 rgb;
+        glm::vec3 normal;
+    };
+    std::vector<std::uint32_t> frontier;
+    for (const std::uint32_t t : hole) {
+        bool next_to_known = false;
+        for_each_neighbour(t, n, [&](std::uint32_t u) { next_to_known |= known(u, 1); });
+        if (next_to_known) {
+            frontier.push_back(t);
+        }
+    }
+    std::vector<Fill> fills;
+    for (std::int32_t layer = 1; !frontier.empty(); ++layer) {
+        fills.clear();
+        for (const std::uint32_t t : frontier) {
+            const glm::vec3 dir =
+                oct::texel_direction({static_cast<int>(t % static_cast<std::uint32_t>(n)),
+                                      static_cast<int>(t / static_cast<std::uint32_t>(n))},
+                                     n);
+            Fill f{t, 0.0f, glm::vec3(0.0f), glm::vec3(0.0f)};
+            int from = 0;
+            for_each_neighbour(t, n, [&](std::uint32_t u) {
+                if (!known(u, layer)) {
+                    return;
+                }
+                const float d = map.distance[u];
+                const glm::vec3 normal = map.normal_at(u);
+                const glm::vec3 ud =
+                    oct::texel_direction({static_cast<int>(u % static_cast<std::uint32_t>(n)),
+                                          static_cast<int>(u / static_cast<std::uint32_t>(n))},
+                                         n);
+                const float cos_plane = glm::dot(normal, dir);
+                float s = d;
+                if (std::abs(cos_plane) >= kMinPlaneCosine) {
+                    const float on_plane = glm::dot(normal, d * ud) / cos_plane;
+                    if (on_plane > 0.5f * d && on_plane < 2.0f * d) {
+                        s = on_plane;
+                    }
+                }
+                f.distance += s;
+                f.rgb += map.radiance_at(u);
+                f.normal += normal;
+                ++from;
+            });
+            const float len = glm::length(f.normal);
+            f.distance /= static_cast<float>(from);
+            f.rgb /= static_cast<float>(from);
+            f.normal = len > 0.0f ? f.normal / len : glm::vec3(0.0f);
+            fills.push_back(f);
+        }
+        const float confidence =
+            std::ldexp(1.0f, -static_cast<int>(std::bit_width(static_cast<unsigned>(layer))));
+        std::vector<std::uint32_t> next;
+        for (const Fill& f : fills) {
+            map.set_surface(f.t, f.distance, f.rgb, f.normal, confidence);
+            layer_of[f.t] = layer;
+        }
+        for (const Fill& f : fills) {
+            for_each_neighbour(f.t, n, [&](std::uint32_t u) {
+                if (layer_of[u] == kUnfilled) {
+                    layer_of[u] = kQueued;
+                    next.push_back(u);
+                }
+            });
+        }
+        frontier.swap(next);
+    }
+    for (const std::uint32_t t : hole) {
+        layer_of[t] = kOutside; // every texel was reached: the hole is connected
+    }
+}
+
+// The pull-push fill (the holes that are not disocclusions): a pull pyramid of the measured
+// texels; each texel to fill takes the smallest enclosing block with support, its mean, or
+// its nearest surface where the block spans a silhouette.
+void pull_push(ProbeMap& map, const std::vector<std::uint8_t>& fill, int hole_fill_texels) {
+    const int n = map.resolution;
     // Pull: level l texel (x, y) gathers the measured texels of level 0 in its 2^l block.
     std::vector<PullLevel> levels;
     PullLevel base;
@@ -196,6 +366,46 @@ void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
             }
             break;
         }
+    }
+}
+
+} // namespace
+
+void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
+    if (hole_fill_texels <= 0) {
+        return;
+    }
+    const std::vector<std::vector<std::uint32_t>> holes = small_holes(map, hole_fill_texels);
+    if (holes.empty()) {
+        return;
+    }
+    // Disocclusions are filled from behind (fill_from_background), the other holes by the
+    // pull-push below, both from the texels measured before any fill.
+    std::vector<std::uint8_t> measured(map.texel_count(), 0);
+    for (std::size_t i = 0; i < map.texel_count(); ++i) {
+        measured[i] = map.state(i) == TexelState::Surface ? 1 : 0;
+    }
+    std::vector<std::uint8_t> fill(map.texel_count(), 0);
+    std::vector<std::pair<std::size_t, float>> disocclusions;
+    {
+        std::vector<std::uint8_t> in_border(map.texel_count(), 0);
+        for (std::size_t h = 0; h < holes.size(); ++h) {
+            const float split = disocclusion_split(map, holes[h], measured, in_border);
+            if (split > 0.0f) {
+                disocclusions.emplace_back(h, split);
+            } else {
+                for (const std::uint32_t t : holes[h]) {
+                    fill[t] = 1;
+                }
+            }
+        }
+    }
+    if (disocclusions.size() < holes.size()) {
+        pull_push(map, fill, hole_fill_texels);
+    }
+    std::vector<std::int32_t> layer_of(map.texel_count(), kOutside);
+    for (const auto& [h, split] : disocclusions) {
+        fill_from_background(map, holes[h], split, measured, layer_of);
     }
 }
 

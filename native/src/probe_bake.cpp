@@ -500,7 +500,7 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     if (progress != nullptr) {
         progress->throw_if_cancelled();
     }
-    fill_small_holes(map, settings.hole_fill_texels);
+    fill_small_holes(map, hole_fill_width(settings));
     return map;
 }
 
@@ -511,6 +511,15 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
                                Progress* progress) {
     check_bake_arguments(settings, cloud.size(), geometry, centre);
     return bake_from(CloudPoints(cloud, geometry), centre, settings, progress);
+}
+
+int default_hole_fill_texels(int resolution) {
+    return std::max(4, static_cast<int>(std::lround(4.0 * resolution / 512.0)));
+}
+
+int hole_fill_width(const BakeSettings& settings) {
+    return settings.hole_fill_texels < 0 ? default_hole_fill_texels(settings.resolution)
+                                         : settings.hole_fill_texels;
 }
 
 PointHierarchy hierarchy_for_bakes(const PointCloud& cloud, const LocalGeometry& geometry,

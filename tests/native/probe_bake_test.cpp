@@ -1,6 +1,7 @@
 // Probe bakes from clouds with a known answer (docs/DESIGN.md §4).
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <vector>
 
 #include <Imath/half.h>
@@ -281,25 +282,145 @@ TEST(ProbeBake, SmallHolesAreInferredAndLargeHolesStayUnknown) {
     EXPECT_EQ(map.state(at(0, 0)), TexelState::Surface);
 }
 
-TEST(ProbeBake, HoleOnASilhouetteTakesTheNearSurface) {
-    ProbeMap map(16, glm::dvec3(0.0));
-    for (int y = 0; y < 16; ++y) {
-        for (int x = 0; x < 16; ++x) {
-            const float d = x < 7 ? 1.0f : 5.0f; // near object left, far wall right
-            map.set_surface(oct::texel_index({x, y}, 16), d, glm::vec3(0.5f), glm::vec3(0, 0, 1),
+TEST(ProbeBake, AGapInANearSurfaceTakesTheNearSurfaceNeverABlend) {
+    ProbeMap map(32, glm::dvec3(0.0));
+    for (int y = 0; y < 32; ++y) {
+        for (int x = 0; x < 32; ++x) {
+            const float d = x < 16 ? 1.0f : 5.0f; // near object left, far wall right
+            map.set_surface(oct::texel_index({x, y}, 32), d, glm::vec3(0.5f), glm::vec3(0, 0, 1),
                             1.0f);
         }
     }
-    // A hole straddling the silhouette: its pull block holds both surfaces.
-    const std::size_t near_side = oct::texel_index({6, 5}, 16);
-    const std::size_t far_side = oct::texel_index({7, 5}, 16);
-    map.set_unknown(near_side);
-    map.set_unknown(far_side);
+    // A gap of 4 texels in the near object that reaches its silhouette: the far wall is 3 of
+    // its 14 border texels, so the gap is the near object's missing points, not a view behind.
+    std::vector<std::size_t> gap;
+    for (int x = 12; x < 16; ++x) {
+        gap.push_back(oct::texel_index({x, 10}, 32));
+        map.set_unknown(gap.back());
+    }
     fill_small_holes(map, 4);
-    for (const std::size_t i : {near_side, far_side}) {
+    for (const std::size_t i : gap) {
         EXPECT_EQ(map.state(i), TexelState::Inferred);
         EXPECT_FLOAT_EQ(map.distance[i], 1.0f); // the near surface, never a floating blend
     }
+}
+
+TEST(ProbeBake, ADisocclusionContinuesTheSurfaceBehindNeverTheNearOne) {
+    // A long strip of unknown texels between a near object (red, 1 m) and the far surface
+    // (blue, 5 m, facing the probe): what a scanner's shadow behind the object looks like from
+    // a probe beside the scanner. 4 texels wide and 24 long: its width, not its length, is
+    // what the fill limit measures.
+    ProbeMap map(32, glm::dvec3(0.0));
+    const glm::vec3 red(0.8f, 0.1f, 0.1f);
+    const glm::vec3 blue(0.1f, 0.2f, 0.9f);
+    std::vector<std::size_t> strip;
+    for (int y = 0; y < 32; ++y) {
+        for (int x = 0; x < 32; ++x) {
+            const std::size_t i = oct::texel_index({x, y}, 32);
+            const glm::vec3 dir = oct::texel_direction({x, y}, 32);
+            if (x >= 8 && x < 12 && y >= 4 && y < 28) {
+                map.set_unknown(i);
+                strip.push_back(i);
+            } else if (x < 8) {
+                map.set_surface(i, 1.0f, red, -dir, 1.0f);
+            } else {
+                map.set_surface(i, 5.0f, blue, -dir, 1.0f);
+            }
+        }
+    }
+    fill_small_holes(map, 4);
+    for (const std::size_t i : strip) {
+        ASSERT_EQ(map.state(i), TexelState::Inferred);
+        // The far surface's tangent planes continued (a sphere of 5 m about the probe here,
+        // with texels 11° apart: the planes drift from it), never the near 1 m or a blend.
+        EXPECT_GT(map.distance[i], 4.5f);
+        EXPECT_LT(map.distance[i], 6.5f);
+        EXPECT_LT(glm::length(map.radiance_at(i) - blue), 0.01f);
+        EXPECT_LT(static_cast<float>(map.rgba[4 * i + 3]), 1.0f);
+    }
+}
+
+TEST(ProbeBake, AScannersShadowSeenFromBesideItShowsTheWallBehind) {
+    // A 40 cm plate 0.6 m before a wall 3 m away, scanned from the origin: the wall has no
+    // points in the plate's shadow (|y|, |z| < 1 m). From a probe 5 cm to the side, the band of
+    // the shadow the plate does not hide (y from 0.81 to 1 m) is a hole about 19 texels wide at
+    // 1024²: the wall is there, and the fill must show it, not grow the plate over it.
+    PointCloud cloud;
+    add_wall_x(cloud, 0.6f, 0.01f, 0.01f, 0.2f);
+    const std::size_t plate_points = cloud.size();
+    PointCloud wall;
+    add_wall_x(wall, 3.0f, 0.01f, 0.01f, 1.5f);
+    for (std::size_t i = 0; i < wall.size(); ++i) {
+        const glm::vec3 p = wall.positions[i];
+        if (std::abs(p.y) < 1.0f && std::abs(p.z) < 1.0f) {
+            continue; // in the plate's shadow
+        }
+        cloud.positions.push_back(p);
+        cloud.colors.emplace_back(0.1f, 0.2f, 0.9f);
+        cloud.scan_index.push_back(0);
+    }
+    for (std::size_t i = 0; i < plate_points; ++i) {
+        cloud.colors[i] = glm::vec3(0.8f, 0.1f, 0.1f);
+    }
+    cloud.scans.push_back(ScanSource{"plate and wall", cloud.size(), glm::dvec3(0.0), true});
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    const glm::dvec3 probe(0.0, 0.05, 0.0);
+
+    auto band_on_the_wall = [&](int hole_fill_texels) {
+        BakeSettings settings;
+        settings.resolution = 1024;
+        settings.hole_fill_texels = hole_fill_texels;
+        const ProbeMap map = bake_probe_from_cloud(cloud, geometry, probe, settings);
+        std::size_t band = 0;
+        std::size_t wall_filled = 0;
+        std::size_t plate = 0;
+        for (int y = 0; y < map.resolution; ++y) {
+            for (int x = 0; x < map.resolution; ++x) {
+                const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
+                if (d.x <= 0.0f) {
+                    continue;
+                }
+                const glm::vec3 on_wall = glm::vec3(probe) + d * (3.0f / d.x);
+                if (on_wall.y < 0.88f || on_wall.y > 0.97f || std::abs(on_wall.z) > 0.5f) {
+                    continue;
+                }
+                ++band;
+                const std::size_t i = oct::texel_index({x, y}, map.resolution);
+                const float truth = glm::length(on_wall - glm::vec3(probe));
+                if (map.state(i) == TexelState::Inferred &&
+                    std::abs(map.distance[i] - truth) < 0.02f * truth &&
+                    map.radiance_at(i).z > 0.8f) {
+                    ++wall_filled;
+                }
+                plate += map.distance[i] < 1.0f ? 1 : 0;
+            }
+        }
+        EXPECT_GT(band, 1000u);
+        std::printf("shadow band seen from beside the scanner, hole fill %d: %zu texels, %.3f "
+                    "the wall (inferred), %.3f the plate\n",
+                    hole_fill_texels, band,
+                    static_cast<double>(wall_filled) / static_cast<double>(band),
+                    static_cast<double>(plate) / static_cast<double>(band));
+        return std::pair{static_cast<double>(wall_filled) / static_cast<double>(band),
+                         static_cast<double>(plate) / static_cast<double>(band)};
+    };
+    const auto [wall_filled, plate] = band_on_the_wall(32);
+    EXPECT_GT(wall_filled, 0.99);
+    EXPECT_EQ(plate, 0.0);
+    // At the default width for 1024² (8 texels) the band is too wide to guess: it stays unknown.
+    EXPECT_EQ(band_on_the_wall(-1).first, 0.0);
+}
+
+TEST(ProbeBake, TheDefaultHoleWidthKeepsItsAngleAboveFiveHundredTwelve) {
+    EXPECT_EQ(default_hole_fill_texels(64), 4);
+    EXPECT_EQ(default_hole_fill_texels(512), 4);
+    EXPECT_EQ(default_hole_fill_texels(1024), 8);
+    EXPECT_EQ(default_hole_fill_texels(2048), 16);
+    BakeSettings settings;
+    settings.resolution = 2048;
+    EXPECT_EQ(hole_fill_width(settings), 16);
+    settings.hole_fill_texels = 0;
+    EXPECT_EQ(hole_fill_width(settings), 0);
 }
 
 TEST(ProbeBake, RejectsBadParameters) {

@@ -136,7 +136,7 @@ def place_adaptively(
     trace: Optional[dict] = None,
     threads: int = 0,
     splat_scale: float = 0.8,
-    hole_fill_texels: int = 4,
+    hole_fill_texels: Optional[int] = None,
     log: Log = None,
     sources: Sequence[dict] = (),
     progress: Progress = None,
@@ -172,7 +172,9 @@ def place_adaptively(
     os.makedirs(folder)
     work = folder.rstrip(os.sep) + ".adding"
     options = BakeOptions(resolution=int(resolution), splat_scale=splat_scale,
-                          hole_fill_texels=hole_fill_texels, plan=plan, storage=storage,
+                          hole_fill_texels=(defaults.bake("hole_fill_texels") if hole_fill_texels is None
+                                            else hole_fill_texels),
+                          plan=plan, storage=storage,
                           distance_step=distance_step)
 
     def step(fraction: float, stage: str):

@@ -37,8 +37,11 @@ struct BakeSettings {
     float splat_edge_margin = 0.5f;
     // Largest splat radius in texels; bounds the cost of points very close to a probe.
     int max_splat_radius_texels = 64;
-    // Holes up to this many texels across are filled and marked inferred; larger stay unknown.
-    int hole_fill_texels = 4;
+    // Holes up to this many texels across (their width, not their length) are filled and marked
+    // inferred; wider ones stay unknown; 0 fills none. Negative: the default width,
+    // default_hole_fill_texels, which grows with the resolution (a scanner's shadow covers the
+    // same angle at any resolution).
+    int hole_fill_texels = -1;
     // Points nearer than this to the probe centre are skipped (no direction to speak of).
     float min_distance = 1e-4f;
     // Baking from the point hierarchy (bake_probe_from_hierarchy): a cell's surfels stand in
@@ -71,9 +74,22 @@ bake_probe_from_hierarchy(const PointCloud& cloud, const LocalGeometry& geometry
                                                  const BakeSettings& settings,
                                                  Progress* progress = nullptr);
 
-// Fills holes of at most settings.hole_fill_texels texels across by pull-push over the measured
-// texels, marking them inferred (confidence 0.5 per pyramid level climbed); other texels with no
-// data become unknown. Texels already surface, empty or inferred are left as they are.
+// The default hole width at an N×N map: 4 texels up to 512², then the same angle (about 1.6°),
+// so 8 texels at 1024² and 16 at 2048².
+[[nodiscard]] int default_hole_fill_texels(int resolution);
+
+// The hole width settings.hole_fill_texels means at settings.resolution (its default where it
+// is negative).
+[[nodiscard]] int hole_fill_width(const BakeSettings& settings);
+
+// Fills the holes (8-connected unknown texels) of at most hole_fill_texels texels across,
+// marking them inferred; wider holes stay unknown, and texels already surface, empty or
+// inferred are left as they are. A hole on a silhouette whose border is largely the far
+// surface is a disocclusion (what the scans could not see behind the near surface): it is
+// filled from that far surface inward, continuing its plane, with confidence halving every
+// time the fill reaches twice as far. Any other hole takes a pull-push of the measured texels
+// (confidence 0.5 per pyramid level climbed), the nearest surface where the block it draws from
+// spans a silhouette.
 void fill_small_holes(ProbeMap& map, int hole_fill_texels);
 
 } // namespace lfprobe

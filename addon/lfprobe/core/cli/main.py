@@ -267,7 +267,10 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--cache", default=None, metavar="DIR", help="parsed-scan cache folder")
     bake.add_argument("--no-cache", action="store_true", help="parse the scans without the cache")
     bake.add_argument("--splat-scale", type=finite_float, default=defaults.bake("splat_scale"), help="splat radius / point spacing")
-    bake.add_argument("--hole-fill", type=int, default=defaults.bake("hole_fill_texels"), help="largest hole (texels) to fill")
+    bake.add_argument("--hole-fill", type=int, default=defaults.bake("hole_fill_texels"), help="widest hole (texels across) to fill: a hole where the scans could not see "
+                       "behind a near surface continues the surface behind, any other is filled "
+                       "from around it; 0: none; default: 4 texels up to 512², the same angle "
+                       "(about 1.6°) above, 16 at 2048²")
     bake.add_argument("--normal-k", type=int, default=defaults.bake("normal_neighbours"), help="neighbours for PCA normals")
     bake.add_argument("--splat-edge-margin", type=finite_float, default=defaults.bake("splat_edge_margin"),
                       metavar="S", help="how far (point spacings) a point at its surface's edge splats "
