@@ -70,6 +70,8 @@ PlanSettings plan_settings_from(const py::dict& options) {
             s.bake.lod_texels = v.cast<float>();
         } else if (key == "splat_edge_margin") {
             s.bake.splat_edge_margin = v.cast<float>();
+        } else if (key == "face_the_probe") {
+            s.bake.face_the_probe = v.cast<bool>();
         } else {
             throw InputError(
                 "plan: unknown option '" + key +
@@ -77,7 +79,7 @@ PlanSettings plan_settings_from(const py::dict& options) {
                 "max_resolution, footprint, quantile, samples_per_spacing, classify, clearance, "
                 "cell_reach, max_move, partly_unknown, min_coverage_gain, drop, "
                 "classify_resolution, splat_scale, splat_plane_reach, "
-                "hole_fill_texels, lod_texels, splat_edge_margin)");
+                "hole_fill_texels, lod_texels, splat_edge_margin, face_the_probe)");
         }
     }
     return s;

@@ -46,6 +46,8 @@ CloudBakeOptions cloud_bake_options_from(const py::dict& options) {
             o.settings.lod_texels = v.cast<float>();
         } else if (key == "splat_edge_margin") {
             o.settings.splat_edge_margin = v.cast<float>();
+        } else if (key == "face_the_probe") {
+            o.settings.face_the_probe = v.cast<bool>();
         } else if (key == "normal_neighbours") {
             o.geometry.normal_neighbours = v.cast<int>();
         } else {
@@ -94,7 +96,7 @@ void bind_staged_bake(py::module_& m) {
         py::arg("cloud"), py::arg("settings") = py::dict(),
         "Start making a cloud ready to bake from; settings as bake_probe_set's keywords "
         "(resolution, splat_scale, hole_fill_texels, max_splat_radius_texels, normal_neighbours, "
-        "lod_texels). The Job's result is a CloudBakeSource.");
+        "lod_texels, splat_edge_margin, face_the_probe). The Job's result is a CloudBakeSource.");
 
     m.def(
         "cloud_bake_manifest",

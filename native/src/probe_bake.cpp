@@ -493,9 +493,13 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
         }
         const std::size_t i = static_cast<std::uint32_t>(winner[t] & 0xffffffffu);
         const glm::vec3 rgb = colour_sums[t].mean(source.colour(i));
-        Surfel p;
+        Surfel p{};
         (void)surfel_of(i, p); // a winner was splatted, so it has a direction
-        map.set_surface(t, surfel_depth(p, plane_hit(p, directions[t])), rgb, p.normal, 1.0f);
+        // BakeSettings::face_the_probe: a winner facing away is turned toward the centre.
+        const glm::vec3 normal = settings.face_the_probe && glm::dot(p.normal, directions[t]) > 0.0f
+                                     ? -p.normal
+                                     : p.normal;
+        map.set_surface(t, surfel_depth(p, plane_hit(p, directions[t])), rgb, normal, 1.0f);
     });
     if (progress != nullptr) {
         progress->throw_if_cancelled();

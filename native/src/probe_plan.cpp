@@ -40,6 +40,7 @@ ProbeClassification quick_classify(const PointCloud& cloud, const LocalGeometry&
                                    const ClassificationSettings& classes) {
     BakeSettings quick = settings.bake;
     quick.resolution = settings.classify_resolution;
+    quick.face_the_probe = false; // back faces are how a probe inside geometry shows
     return classify_probe(bake_probe_from_cloud(cloud, geometry, at, quick), classes);
 }
 

@@ -272,7 +272,8 @@ json splat_settings_json(const BakeSettings& settings) {
                 {"hole_fill_texels", settings.hole_fill_texels},
                 {"min_distance", settings.min_distance},
                 {"lod_texels", settings.lod_texels},
-                {"splat_edge_margin", settings.splat_edge_margin}};
+                {"splat_edge_margin", settings.splat_edge_margin},
+                {"face_the_probe", settings.face_the_probe}};
 }
 
 } // namespace lfprobe

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <vector>
 
 #include <Imath/half.h>
@@ -10,6 +11,7 @@
 
 #include "lfprobe/octahedral.hpp"
 #include "lfprobe/probe_bake.hpp"
+#include "lfprobe/probe_lookup.hpp"
 #include "synthetic_scene.hpp"
 
 using namespace lfprobe;
@@ -421,6 +423,33 @@ TEST(ProbeBake, TheDefaultHoleWidthKeepsItsAngleAboveFiveHundredTwelve) {
     EXPECT_EQ(hole_fill_width(settings), 16);
     settings.hole_fill_texels = 0;
     EXPECT_EQ(hole_fill_width(settings), 0);
+}
+
+TEST(ProbeBake, ASurfaceScannedFromItsOtherSideIsWhatTheProbeSees) {
+    // A sheet at x = 1 scanned from x = 2: its normals face its scanner, away from a probe at
+    // the origin. From the probe's centre it is still the nearest thing in those directions: a
+    // HIT at 1 m, not a back face; baked for the planner's classification (face_the_probe off)
+    // it keeps its back faces, which is how a probe inside an object shows.
+    PointCloud cloud;
+    add_wall_x(cloud, 1.0f, 0.01f, 0.01f, 0.3f);
+    cloud.scans.push_back(ScanSource{"sheet", cloud.size(), glm::dvec3(2.0, 0.0, 0.0), true});
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    BakeSettings settings;
+    settings.resolution = 256;
+    const ProbeMap facing = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+    settings.face_the_probe = false;
+    const ProbeMap as_scanned = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+    for (const glm::dvec3 dir :
+         {glm::dvec3(1.0, 0.0, 0.0), glm::dvec3(1.0, 0.2, -0.1), glm::dvec3(1.0, -0.25, 0.2)}) {
+        const ProbeTraceResult seen =
+            lookup_probe(facing, dir, 0.0, std::numeric_limits<double>::infinity());
+        ASSERT_EQ(seen.status, TraceStatus::Hit);
+        EXPECT_NEAR(seen.t, 1.0 / glm::normalize(dir).x, 0.01); // the sheet's plane
+        EXPECT_LT(glm::dot(glm::dvec3(seen.normal), dir), 0.0);
+        EXPECT_EQ(
+            lookup_probe(as_scanned, dir, 0.0, std::numeric_limits<double>::infinity()).status,
+            TraceStatus::Unknown);
+    }
 }
 
 TEST(ProbeBake, RejectsBadParameters) {

@@ -68,6 +68,7 @@ const Scene& scene() {
 ProbeClassification classify_at(const glm::dvec3& at, ClassificationSettings settings = {}) {
     BakeSettings bake;
     bake.resolution = 64;
+    bake.face_the_probe = false; // as the planner's quick bake
     return classify_probe(bake_probe_from_cloud(scene().cloud, scene().geometry, at, bake),
                           settings);
 }

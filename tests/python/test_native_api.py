@@ -152,7 +152,7 @@ def test_plan_options_reach_the_splat_settings_of_the_planned_bake(native, tmp_p
                       for name in ("planned", "plain"))
     assert planned["splat_plane_reach"] == 3.0 and plain["splat_plane_reach"] == 2.0
     splat_keys = {"splat_scale", "splat_plane_reach", "max_splat_radius_texels", "hole_fill_texels",
-                  "min_distance", "lod_texels"}
+                  "min_distance", "lod_texels", "face_the_probe"}
     assert splat_keys <= set(planned) and splat_keys <= set(plain)
 
 

@@ -42,6 +42,13 @@ struct BakeSettings {
     // default_hole_fill_texels, which grows with the resolution (a scanner's shadow covers the
     // same angle at any resolution).
     int hole_fill_texels = -1;
+    // A texel's surface is what the probe's centre sees in its direction, so it faces the
+    // centre: a winning point whose normal (oriented toward its scanner) faces away, a surface
+    // scanned from its other side (a sheet, a thin object's edge where the neighbours' plane
+    // tilts), is stored turned toward the centre, and an eye at the probe sees it as a HIT, not
+    // as a back face (UNKNOWN). Off: normals as estimated, so that a probe inside an object
+    // sees its back faces (the planner's classification, probe_classification.hpp, bakes so).
+    bool face_the_probe = true;
     // Points nearer than this to the probe centre are skipped (no direction to speak of).
     float min_distance = 1e-4f;
     // Baking from the point hierarchy (bake_probe_from_hierarchy): a cell's surfels stand in
