@@ -518,7 +518,7 @@ ProbeMap bake_probe_from_cloud(const PointCloud& cloud, const LocalGeometry& geo
 }
 
 int default_hole_fill_texels(int resolution) {
-    return std::max(4, static_cast<int>(std::lround(4.0 * resolution / 512.0)));
+    return std::max(4, static_cast<int>(std::lround(12.0 * resolution / 512.0)));
 }
 
 int hole_fill_width(const BakeSettings& settings) {

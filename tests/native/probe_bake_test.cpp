@@ -406,21 +406,22 @@ TEST(ProbeBake, AScannersShadowSeenFromBesideItShowsTheWallBehind) {
         return std::pair{static_cast<double>(wall_filled) / static_cast<double>(band),
                          static_cast<double>(plate) / static_cast<double>(band)};
     };
-    const auto [wall_filled, plate] = band_on_the_wall(32);
+    const auto [wall_filled, plate] = band_on_the_wall(-1); // 24 texels at 1024²
     EXPECT_GT(wall_filled, 0.99);
     EXPECT_EQ(plate, 0.0);
-    // At the default width for 1024² (8 texels) the band is too wide to guess: it stays unknown.
-    EXPECT_EQ(band_on_the_wall(-1).first, 0.0);
+    // Narrower than the band, the fill leaves it unknown.
+    EXPECT_EQ(band_on_the_wall(8).first, 0.0);
 }
 
-TEST(ProbeBake, TheDefaultHoleWidthKeepsItsAngleAboveFiveHundredTwelve) {
-    EXPECT_EQ(default_hole_fill_texels(64), 4);
-    EXPECT_EQ(default_hole_fill_texels(512), 4);
-    EXPECT_EQ(default_hole_fill_texels(1024), 8);
-    EXPECT_EQ(default_hole_fill_texels(2048), 16);
+TEST(ProbeBake, TheDefaultHoleWidthIsAnAngle) {
+    EXPECT_EQ(default_hole_fill_texels(64), 4); // at least 4 texels
+    EXPECT_EQ(default_hole_fill_texels(256), 6);
+    EXPECT_EQ(default_hole_fill_texels(512), 12);
+    EXPECT_EQ(default_hole_fill_texels(1024), 24);
+    EXPECT_EQ(default_hole_fill_texels(2048), 48);
     BakeSettings settings;
     settings.resolution = 2048;
-    EXPECT_EQ(hole_fill_width(settings), 16);
+    EXPECT_EQ(hole_fill_width(settings), 48);
     settings.hole_fill_texels = 0;
     EXPECT_EQ(hole_fill_width(settings), 0);
 }

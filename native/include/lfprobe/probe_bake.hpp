@@ -81,8 +81,10 @@ bake_probe_from_hierarchy(const PointCloud& cloud, const LocalGeometry& geometry
                                                  const BakeSettings& settings,
                                                  Progress* progress = nullptr);
 
-// The default hole width at an N×N map: 4 texels up to 512², then the same angle (about 1.6°),
-// so 8 texels at 1024² and 16 at 2048².
+// The default hole width at an N×N map: an angle of about 4.8° (12 texels at 512², 24 at
+// 1024², 48 at 2048²), at least 4 texels. Wide enough for what four stations leave unseen
+// behind a room's furniture as a probe between them sees it (the strip under a desk's edge),
+// narrow enough that a partial sweep's unscanned side stays unknown.
 [[nodiscard]] int default_hole_fill_texels(int resolution);
 
 // The hole width settings.hole_fill_texels means at settings.resolution (its default where it

@@ -269,8 +269,8 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--splat-scale", type=finite_float, default=defaults.bake("splat_scale"), help="splat radius / point spacing")
     bake.add_argument("--hole-fill", type=int, default=defaults.bake("hole_fill_texels"), help="widest hole (texels across) to fill: a hole where the scans could not see "
                        "behind a near surface continues the surface behind, any other is filled "
-                       "from around it; 0: none; default: 4 texels up to 512², the same angle "
-                       "(about 1.6°) above, 16 at 2048²")
+                       "from around it; 0: none; default: about 4.8°, 12 texels at 512², 48 at "
+                       "2048², at least 4")
     bake.add_argument("--normal-k", type=int, default=defaults.bake("normal_neighbours"), help="neighbours for PCA normals")
     bake.add_argument("--splat-edge-margin", type=finite_float, default=defaults.bake("splat_edge_margin"),
                       metavar="S", help="how far (point spacings) a point at its surface's edge splats "
