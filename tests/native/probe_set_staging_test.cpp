@@ -15,6 +15,7 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/probe_set_staging.hpp"
 #include "synthetic_scene.hpp"
+#include "temp_folder.hpp"
 
 using namespace lfprobe;
 namespace fs = std::filesystem;
@@ -22,16 +23,10 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path fresh_dir(const std::string& name) {
-    const fs::path dir = fs::path(::testing::TempDir()) / ("lfprobe_staging_" + name);
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
+    return lfprobe::testing::fresh_dir("lfprobe_staging_", name);
 }
 
-std::string file_bytes(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
+using lfprobe::testing::file_bytes;
 
 struct PartsBake {
     lfprobe::testing::BoxRoomScene scene;

@@ -18,6 +18,7 @@
 #include "lfprobe/probe_exr.hpp"
 #include "lfprobe/probe_set.hpp"
 #include "synthetic_scene.hpp"
+#include "temp_folder.hpp"
 
 using namespace lfprobe;
 namespace fs = std::filesystem;
@@ -25,10 +26,7 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path fresh_dir(const std::string& name) {
-    const fs::path dir = fs::path(::testing::TempDir()) / ("lfprobe_" + name);
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
+    return lfprobe::testing::fresh_dir("lfprobe_", name);
 }
 
 template <class T>

@@ -19,6 +19,7 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/progress.hpp"
 #include "lfprobe/scan_cache.hpp"
+#include "temp_folder.hpp"
 #include "test_data.hpp"
 
 using namespace lfprobe;
@@ -27,16 +28,10 @@ namespace fs = std::filesystem;
 namespace {
 
 fs::path fresh_dir(const std::string& name) {
-    const fs::path dir = fs::path(::testing::TempDir()) / ("lfprobe_cache_" + name);
-    fs::remove_all(dir);
-    fs::create_directories(dir);
-    return dir;
+    return lfprobe::testing::fresh_dir("lfprobe_cache_", name);
 }
 
-void write_file(const fs::path& path, const std::string& content) {
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    out.write(content.data(), static_cast<std::streamsize>(content.size()));
-}
+using lfprobe::testing::write_file;
 
 std::string shared_scan(const std::string& name) {
     return lfprobe::testing::shared_data("scans/" + name);

@@ -9,7 +9,6 @@ import uuid
 from typing import NamedTuple, Optional
 
 import bpy
-import numpy as np
 
 from ..core import native
 from ..core.errors import InputError
@@ -38,8 +37,8 @@ def grid_box(obj) -> tuple:
             f"grid {obj.name!r} is rotated by {math.degrees(angle):.3g}°: probe grids must stay "
             "axis-aligned (clear its rotation, Alt+R)"
         )
-    low = np.array([location[i] - abs(scale[i]) for i in range(3)], dtype=float)
-    high = np.array([location[i] + abs(scale[i]) for i in range(3)], dtype=float)
+    low = tuple(float(location[i] - abs(scale[i])) for i in range(3))
+    high = tuple(float(location[i] + abs(scale[i])) for i in range(3))
     counts = tuple(obj.lfprobe_grid.counts)
     for axis in range(3):
         if high[axis] - low[axis] <= 0 and counts[axis] > 1:
@@ -47,12 +46,12 @@ def grid_box(obj) -> tuple:
     return low, high
 
 
-def probe_positions(obj) -> np.ndarray:
+def probe_positions(obj):
     """The probes of the grid in Blender's frame, x fastest then y then z, where the bake puts
     them (the native core's computation)."""
     low, high = grid_box(obj)
     counts = [int(c) for c in obj.lfprobe_grid.counts]
-    return native.load().grid_positions([float(v) for v in low], [float(v) for v in high], counts)
+    return native.load().grid_positions(list(low), list(high), counts)
 
 
 def default_probe_dir(obj) -> str:
