@@ -62,15 +62,15 @@ if command -v blender >/dev/null 2>&1; then
   bdir="$out/blender"
   mkdir -p "$bdir/scans"
   i=0
-  # The scene file's four scanner positions, at the report's 1° step.
+  # The scene file's four scanner positions, at the report's finest step (0.25°).
   while read -r x y z; do
     i=$((i + 1))
-    ./lfprobe scan --mesh blend/lab_room/lab_room.obj --at "$x" "$y" "$z" --step-deg 1 \
+    ./lfprobe scan --mesh blend/lab_room/lab_room.obj --at "$x" "$y" "$z" --step-deg 0.25 \
       --noise-mm 1 --out "$bdir/scans/scan_$i.xyz" --quiet
   done < <(/usr/bin/python3 -c "import json,sys; [print(*p) for p in json.load(open(sys.argv[1]))['scanners']]" "$scene_json")
   batch() { blender -b --factory-startup --python-exit-code 1 -P addon/lfprobe/cli.py -- --open "$1" "${@:2}" 2>&1 | grep '^lfprobe' || { echo "demo: the Blender step '$2' failed" >&2; exit 1; }; }
   batch blend/lab_room.blend import --scan "$bdir"/scans/scan_*.xyz --grid-from probe_grid \
-    --resolution 512 --save-as "$bdir/lab_room.blend"
+    --resolution 1024 --save-as "$bdir/lab_room.blend"
   batch "$bdir/lab_room.blend" bake
   batch "$bdir/lab_room.blend" render --camera between_probes --out "$bdir/between_probes.exr"
   batch "$bdir/lab_room.blend" compare --reference-collection geometry --camera between_probes \

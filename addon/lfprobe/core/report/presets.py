@@ -70,6 +70,14 @@ class Preset:
     planning_base_factor: float = 0.5
     planning_target_unknown: float = 0.01
     planning_max_added: int = 12
+    # The fine resolution of the reference setting (every trace variant, the images, the
+    # peers' comparison); None: the middle of fine_resolutions.
+    reference_resolution: Optional[int] = None
+
+    def reference_fine_resolution(self) -> int:
+        if self.reference_resolution is not None:
+            return self.reference_resolution
+        return self.fine_resolutions[len(self.fine_resolutions) // 2]
 
 
 PRESETS = {
@@ -79,7 +87,7 @@ PRESETS = {
                    distance_fractions=[0.0, 0.1, 0.3, 0.6, 1.0], timing_repeats=1,
                    poisson_depth=6, stability_resolution=64, planning_max_added=3,
                    reference_spp=16, mesh_supersample=1),
-    "demo": Preset("demo", max_view_width=256, gt_spp=16, scan_step_factors=[4.0, 8.0],
+    "demo": Preset("demo", max_view_width=256, gt_spp=16, scan_step_factors=[1.0, 4.0],
                    min_scan_step_deg=0.25, fine_resolutions=[256, 512, 1024],
                    count_factors=[0.5, 1.0],
                    # Without coarse levels a trace costs 5× as much for the same image: the
@@ -87,7 +95,9 @@ PRESETS = {
                    trace_variants=[t for t in TRACE_VARIANTS if t[0] != "no coarse levels"],
                    mesh_resolutions=[256, 512, 1024, 2048],
                    distance_fractions=[0.0, 0.1, 0.3, 0.6, 1.0],
-                   timing_repeats=2, poisson_depth=8, stability_resolution=256),
+                   timing_repeats=2, poisson_depth=8, stability_resolution=256,
+                   # At 0.25° a 512² probe, not the scan, limits the picture.
+                   reference_resolution=1024),
     "full": Preset("full", max_view_width=None, gt_spp=16, scan_step_factors=[1.0, 2.0, 4.0],
                    min_scan_step_deg=0.05, fine_resolutions=[256, 512, 1024, 2048, 3072, 4096],
                    count_factors=[0.5, 1.0, 2.0], trace_variants=TRACE_VARIANTS,

@@ -188,7 +188,7 @@ class Sweep:
         ctx.log("simulated scans")
         self.densities = simulate_scans(ctx)
         densest = self.densities[0]
-        reference_res = p.fine_resolutions[len(p.fine_resolutions) // 2]
+        reference_res = p.reference_fine_resolution()
         full_grid = scaled_grid(ctx, 1.0)
         setups: List[Tuple[ProbeSetup, List]] = []
         for density in self.densities:
