@@ -106,11 +106,11 @@ void add_wall_x(PointCloud& cloud, float x, float pitch_y, float pitch_z, float 
 // The fraction of `map`'s texels, baked at `probe`, whose ray meets the plane x = probe.x +
 // `wall_distance` within `half_extent` of the x axis in y and z, for which `counts(distance)`
 // holds (the texel's stored distance).
-template <class Counts>
-double fraction_on_wall_x(const ProbeMap& map, const glm::vec3& probe, float wall_distance,
-                          float half_extent, Counts&& counts) {
-    std::size_t inside = 0;
-    std::size_t counted = 0;
+// Calls visit(texel index, point) for every texel of `map`, baked at `probe`, whose ray meets
+// the plane x = probe.x + `wall_distance` at a point for which `on_it(point)` holds.
+template <class OnIt, class Visit>
+void for_each_texel_on_wall_x(const ProbeMap& map, const glm::vec3& probe, float wall_distance,
+                              OnIt&& on_it, Visit&& visit) {
     for (int y = 0; y < map.resolution; ++y) {
         for (int x = 0; x < map.resolution; ++x) {
             const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
@@ -118,13 +118,27 @@ double fraction_on_wall_x(const ProbeMap& map, const glm::vec3& probe, float wal
                 continue;
             }
             const glm::vec3 on_plane = probe + d * (wall_distance / d.x);
-            if (std::abs(on_plane.y) > half_extent || std::abs(on_plane.z) > half_extent) {
-                continue;
+            if (on_it(on_plane)) {
+                visit(oct::texel_index({x, y}, map.resolution), on_plane);
             }
-            ++inside;
-            counted += counts(map.distance[oct::texel_index({x, y}, map.resolution)]) ? 1 : 0;
         }
     }
+}
+
+template <class Counts>
+double fraction_on_wall_x(const ProbeMap& map, const glm::vec3& probe, float wall_distance,
+                          float half_extent, Counts&& counts) {
+    std::size_t inside = 0;
+    std::size_t counted = 0;
+    for_each_texel_on_wall_x(
+        map, probe, wall_distance,
+        [&](const glm::vec3& p) {
+            return std::abs(p.y) <= half_extent && std::abs(p.z) <= half_extent;
+        },
+        [&](std::size_t i, const glm::vec3&) {
+            ++inside;
+            counted += counts(map.distance[i]) ? 1 : 0;
+        });
     return static_cast<double>(counted) / static_cast<double>(inside);
 }
 
@@ -376,18 +390,13 @@ TEST(ProbeBake, AScannersShadowSeenFromBesideItShowsTheWallBehind) {
         std::size_t band = 0;
         std::size_t wall_filled = 0;
         std::size_t plate = 0;
-        for (int y = 0; y < map.resolution; ++y) {
-            for (int x = 0; x < map.resolution; ++x) {
-                const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
-                if (d.x <= 0.0f) {
-                    continue;
-                }
-                const glm::vec3 on_wall = glm::vec3(probe) + d * (3.0f / d.x);
-                if (on_wall.y < 0.88f || on_wall.y > 0.97f || std::abs(on_wall.z) > 0.5f) {
-                    continue;
-                }
+        for_each_texel_on_wall_x(
+            map, glm::vec3(probe), 3.0f,
+            [](const glm::vec3& p) {
+                return p.y >= 0.88f && p.y <= 0.97f && std::abs(p.z) <= 0.5f;
+            },
+            [&](std::size_t i, const glm::vec3& on_wall) {
                 ++band;
-                const std::size_t i = oct::texel_index({x, y}, map.resolution);
                 const float truth = glm::length(on_wall - glm::vec3(probe));
                 if (map.state(i) == TexelState::Inferred &&
                     std::abs(map.distance[i] - truth) < 0.02f * truth &&
@@ -395,8 +404,7 @@ TEST(ProbeBake, AScannersShadowSeenFromBesideItShowsTheWallBehind) {
                     ++wall_filled;
                 }
                 plate += map.distance[i] < 1.0f ? 1 : 0;
-            }
-        }
+            });
         EXPECT_GT(band, 1000u);
         std::printf("shadow band seen from beside the scanner, hole fill %d: %zu texels, %.3f "
                     "the wall (inferred), %.3f the plate\n",
@@ -596,20 +604,15 @@ TEST(ProbeBake, SilhouettesDoNotGrowByTheSplatRadius) {
         const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
         std::size_t band = 0;
         std::size_t plate = 0;
-        for (int y = 0; y < map.resolution; ++y) {
-            for (int x = 0; x < map.resolution; ++x) {
-                const glm::vec3 d = oct::texel_direction({x, y}, map.resolution);
-                if (d.x <= 0.0f) {
-                    continue;
-                }
-                const glm::vec3 on_plane = d * (0.6f / d.x);
-                if (on_plane.y < 0.214f || on_plane.y > 0.22f || std::abs(on_plane.z) > 0.15f) {
-                    continue;
-                }
+        for_each_texel_on_wall_x(
+            map, glm::vec3(0.0f), 0.6f,
+            [](const glm::vec3& p) {
+                return p.y >= 0.214f && p.y <= 0.22f && std::abs(p.z) <= 0.15f;
+            },
+            [&](std::size_t i, const glm::vec3&) {
                 ++band;
-                plate += map.distance[oct::texel_index({x, y}, map.resolution)] < 1.0f ? 1 : 0;
-            }
-        }
+                plate += map.distance[i] < 1.0f ? 1 : 0;
+            });
         return static_cast<double>(plate) / static_cast<double>(std::max<std::size_t>(band, 1));
     };
     const double clipped = plate_beyond_its_edge(BakeSettings{}.splat_edge_margin);
