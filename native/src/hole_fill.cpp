@@ -152,13 +152,12 @@ std::vector<std::vector<std::uint32_t>> small_holes(const ProbeMap& map, int max
 // seen from elsewhere): what is there is the far surface, continued. A hole bordered mostly by
 // the near surface is a gap in that surface (a thin object's missing points): none (0).
 float disocclusion_split(const ProbeMap& map, const std::vector<std::uint32_t>& hole,
-                         const std::vector<std::uint8_t>& measured,
                          std::vector<std::uint8_t>& in_border) {
     const int n = map.resolution;
     std::vector<std::uint32_t> border;
     for (const std::uint32_t t : hole) {
         for_each_neighbour(t, n, [&](std::uint32_t u) {
-            if (measured[u] && !in_border[u]) {
+            if (!in_border[u] && map.state(u) == TexelState::Surface) {
                 in_border[u] = 1;
                 border.push_back(u);
             }
@@ -189,7 +188,6 @@ float disocclusion_split(const ProbeMap& map, const std::vector<std::uint32_t>& 
 // with confidence 2^-(1 + floor(log2 k)): as the pull-push's level, halving as the fill
 // reaches twice as far. Reads only texels of earlier layers, so the order is fixed.
 void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole, float split,
-                          const std::vector<std::uint8_t>& measured,
                           std::vector<std::int32_t>& layer_of) {
     const int n = map.resolution;
     for (const std::uint32_t t : hole) {
@@ -198,7 +196,8 @@ void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole,
     // A known neighbour for layer `layer`: the background border, or a texel of this hole
     // filled by an earlier layer.
     auto known = [&](std::uint32_t u, std::int32_t layer) {
-        return (measured[u] && map.distance[u] >= split) || layer_of[u] < layer;
+        return layer_of[u] < layer ||
+               (map.state(u) == TexelState::Surface && map.distance[u] >= split);
     };
     struct Fill {
         std::uint32_t t;
@@ -380,17 +379,14 @@ void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
         return;
     }
     // Disocclusions are filled from behind (fill_from_background), the other holes by the
-    // pull-push below, both from the texels measured before any fill.
-    std::vector<std::uint8_t> measured(map.texel_count(), 0);
-    for (std::size_t i = 0; i < map.texel_count(); ++i) {
-        measured[i] = map.state(i) == TexelState::Surface ? 1 : 0;
-    }
+    // pull-push below, both from the measured texels only: a fill writes inferred texels,
+    // which neither reads.
     std::vector<std::uint8_t> fill(map.texel_count(), 0);
     std::vector<std::pair<std::size_t, float>> disocclusions;
     {
         std::vector<std::uint8_t> in_border(map.texel_count(), 0);
         for (std::size_t h = 0; h < holes.size(); ++h) {
-            const float split = disocclusion_split(map, holes[h], measured, in_border);
+            const float split = disocclusion_split(map, holes[h], in_border);
             if (split > 0.0f) {
                 disocclusions.emplace_back(h, split);
             } else {
@@ -403,9 +399,12 @@ void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
     if (disocclusions.size() < holes.size()) {
         pull_push(map, fill, hole_fill_texels);
     }
+    if (disocclusions.empty()) {
+        return;
+    }
     std::vector<std::int32_t> layer_of(map.texel_count(), kOutside);
     for (const auto& [h, split] : disocclusions) {
-        fill_from_background(map, holes[h], split, measured, layer_of);
+        fill_from_background(map, holes[h], split, layer_of);
     }
 }
 

@@ -219,7 +219,7 @@ def placement_comparison(ctx: RunContext, sweep: Sweep, fixed: List[Dict[str, ob
     densest = sweep.densities[0]
     walk = s.walk_views() or list(ctx.views)
     cameras = [ctx.camera(v) for v in walk]
-    resolution = p.fine_resolutions[len(p.fine_resolutions) // 2]
+    resolution = p.middle_fine_resolution()
     per_probe = next(r["memory_bytes_per_probe"] for r in fixed if r["resolution"] == resolution)
     full_probes = s.grid_counts[0] * s.grid_counts[1] * s.grid_counts[2]
     budget = per_probe * full_probes

@@ -74,10 +74,13 @@ class Preset:
     # peers' comparison); None: the middle of fine_resolutions.
     reference_resolution: Optional[int] = None
 
+    def middle_fine_resolution(self) -> int:
+        return self.fine_resolutions[len(self.fine_resolutions) // 2]
+
     def reference_fine_resolution(self) -> int:
         if self.reference_resolution is not None:
             return self.reference_resolution
-        return self.fine_resolutions[len(self.fine_resolutions) // 2]
+        return self.middle_fine_resolution()
 
 
 PRESETS = {
