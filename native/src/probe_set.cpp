@@ -1,9 +1,11 @@
 #include "lfprobe/probe_set.hpp"
 
 #include <chrono>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -87,15 +89,37 @@ json ProbeSetManifest::to_json() const {
     return j;
 }
 
+namespace {
+
+// A whole-number field of `j`, or `fallback` where it is absent. Anything else (a fraction,
+// 1e300, a string) is refused naming the field: never cast, since a float beyond the integer's
+// range is undefined behaviour (found by the manifest fuzz harness).
+std::int64_t whole_number_or(const json& j, const char* key, std::int64_t fallback,
+                             const std::string& where) {
+    const auto found = j.find(key);
+    if (found == j.end()) {
+        return fallback;
+    }
+    if (!found->is_number_integer() ||
+        (found->is_number_unsigned() &&
+         found->get<std::uint64_t>() >
+             static_cast<std::uint64_t>(std::numeric_limits<std::int64_t>::max()))) {
+        throw InputError(where + ": '" + key + "' must be a whole number, got " + found->dump());
+    }
+    return found->get<std::int64_t>();
+}
+
+} // namespace
+
 ProbeSetManifest ProbeSetManifest::from_json(const json& j, const std::string& where) {
     if (!j.is_object() || j.value("format", "") != "lfprobe-probe-set") {
         throw InputError(where + ": not an lfprobe probe set manifest (expected \"format\": "
                                  "\"lfprobe-probe-set\")");
     }
     ProbeSetManifest m;
-    m.format_version = j.value("format_version", 0);
-    if (m.format_version != kProbeSetFormatVersion) {
-        throw InputError(where + ": format_version " + std::to_string(m.format_version) +
+    const std::int64_t format_version = whole_number_or(j, "format_version", 0, where);
+    if (format_version != kProbeSetFormatVersion) {
+        throw InputError(where + ": format_version " + std::to_string(format_version) +
                          " is not supported (expected " + std::to_string(kProbeSetFormatVersion) +
                          ")");
     }
@@ -124,7 +148,11 @@ ProbeSetManifest ProbeSetManifest::from_json(const json& j, const std::string& w
             r.coverage = ProbeCoverage{c.value("surface", 0.0), c.value("inferred", 0.0),
                                        c.value("empty", 0.0), c.value("unknown", 0.0)};
         }
-        r.memory_bytes = p.value("memory_bytes", std::size_t{0});
+        const std::int64_t memory_bytes = whole_number_or(p, "memory_bytes", 0, where);
+        if (memory_bytes < 0) {
+            throw InputError(where + ": probe '" + r.file + "' has a negative memory_bytes");
+        }
+        r.memory_bytes = static_cast<std::size_t>(memory_bytes);
         positions.push_back(r.position);
         m.probes.push_back(std::move(r));
     }

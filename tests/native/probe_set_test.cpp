@@ -254,6 +254,19 @@ TEST(ProbeSet, ManifestValuesThatWouldSizeAnAllocationAreRefused) {
     refused("a resolution of 0");
     manifest(probe, R"(, "bake": )" + std::string(200000, '[') + std::string(200000, ']'));
     refused("JSON nested 200,000 deep");
+    // Numbers a cast to an integer would make undefined (the fuzz harness's find).
+    std::ofstream(dir / kManifestName)
+        << R"({"format": "lfprobe-probe-set", "format_version": 1e300, "world_offset": [0, 0, 0],)"
+        << R"("probes": [)" << probe << "]}";
+    refused("a format_version of 1e300");
+    manifest(R"({"file": "probe_00000.exr", "position": [0, 0, 0], "resolution": 64,)"
+             R"( "memory_bytes": 1e30})",
+             "");
+    refused("memory_bytes of 1e30");
+    manifest(R"({"file": "probe_00000.exr", "position": [0, 0, 0], "resolution": 64,)"
+             R"( "memory_bytes": -5})",
+             "");
+    refused("a negative memory_bytes");
 }
 
 TEST(ProbeSet, AWriteRemovesTheTemporariesAKilledWriterLeft) {
