@@ -44,11 +44,14 @@ def _materials(b: MeshBuilder, rng) -> None:
     b.texture("poster", tex.poster(rng))
     for name in ("fine_tiles", "plaster", "bricks", "slat", "wood", "concrete", "poster"):
         b.material(name, texture=name)
-    b.material("frame_white", (0.80, 0.80, 0.78))
-    b.material("radiator", (0.85, 0.85, 0.82))
-    b.material("ground", (0.20, 0.22, 0.18))
-    b.material("cord", (0.6, 0.6, 0.55))
-    b.material("ceiling", (0.85, 0.85, 0.85))
+    for name, colour in (
+        ("frame_white", (0.80, 0.80, 0.78)),
+        ("radiator", (0.85, 0.85, 0.82)),
+        ("ground", (0.20, 0.22, 0.18)),
+        ("cord", (0.6, 0.6, 0.55)),
+        ("ceiling", (0.85, 0.85, 0.85)),
+    ):
+        b.material(name, colour)
 
 
 def _hall(b: MeshBuilder) -> None:

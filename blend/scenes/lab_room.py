@@ -72,19 +72,22 @@ def _materials(b: MeshBuilder, rng: np.random.Generator) -> None:
                     ("poster", "poster"), ("paper", "paper"), ("books", "book_spines"),
                     ("whiteboard", "whiteboard"), ("outside", "outside")]:
         b.material(name, texture=t)
-    b.material("plastic_black", (0.02, 0.02, 0.025))
-    b.material("plastic_grey", (0.25, 0.25, 0.27))
-    b.material("plastic_white", (0.75, 0.75, 0.72))
-    b.material("frame_white", (0.80, 0.80, 0.78))
-    b.material("ceramic", (0.70, 0.12, 0.08))
-    b.material("ceramic_white", (0.82, 0.82, 0.80))
-    b.material("page_edges", (0.78, 0.74, 0.62))
-    b.material("cable_black", (0.015, 0.015, 0.015))
-    b.material("cable_white", (0.70, 0.70, 0.68))
-    b.material("cable_blue", (0.03, 0.10, 0.45))
-    b.material("leaf", (0.05, 0.25, 0.04))
-    b.material("terracotta", (0.45, 0.16, 0.07))
-    b.material("light_panel", (0.95, 0.95, 0.93))
+    for name, colour in (
+        ("plastic_black", (0.02, 0.02, 0.025)),
+        ("plastic_grey", (0.25, 0.25, 0.27)),
+        ("plastic_white", (0.75, 0.75, 0.72)),
+        ("frame_white", (0.80, 0.80, 0.78)),
+        ("ceramic", (0.70, 0.12, 0.08)),
+        ("ceramic_white", (0.82, 0.82, 0.80)),
+        ("page_edges", (0.78, 0.74, 0.62)),
+        ("cable_black", (0.015, 0.015, 0.015)),
+        ("cable_white", (0.70, 0.70, 0.68)),
+        ("cable_blue", (0.03, 0.10, 0.45)),
+        ("leaf", (0.05, 0.25, 0.04)),
+        ("terracotta", (0.45, 0.16, 0.07)),
+        ("light_panel", (0.95, 0.95, 0.93)),
+    ):
+        b.material(name, colour)
 
 
 def _shell(b: MeshBuilder) -> None:

@@ -60,26 +60,14 @@ PlanSettings plan_settings_from(const py::dict& options) {
             s.drop = v.cast<bool>();
         } else if (key == "classify_resolution") {
             s.classify_resolution = v.cast<int>();
-        } else if (key == "splat_scale") {
-            s.bake.splat_scale = v.cast<float>();
-        } else if (key == "splat_plane_reach") {
-            s.bake.splat_plane_reach = v.cast<float>();
-        } else if (key == "hole_fill_texels") {
-            s.bake.hole_fill_texels = v.cast<int>();
-        } else if (key == "lod_texels") {
-            s.bake.lod_texels = v.cast<float>();
-        } else if (key == "splat_edge_margin") {
-            s.bake.splat_edge_margin = v.cast<float>();
-        } else if (key == "face_the_probe") {
-            s.bake.face_the_probe = v.cast<bool>();
-        } else {
-            throw InputError(
-                "plan: unknown option '" + key +
-                "' (expected auto_resolution, resolution, min_resolution, "
-                "max_resolution, footprint, quantile, samples_per_spacing, classify, clearance, "
-                "cell_reach, max_move, partly_unknown, min_coverage_gain, drop, "
-                "classify_resolution, splat_scale, splat_plane_reach, "
-                "hole_fill_texels, lod_texels, splat_edge_margin, face_the_probe)");
+        } else if (!set_bake_setting(s.bake, key, v)) {
+            // "resolution" is taken above: a plan's fixed resolution, not the bake's.
+            throw InputError("plan: unknown option '" + key +
+                             "' (expected auto_resolution, min_resolution, max_resolution, "
+                             "footprint, quantile, samples_per_spacing, classify, clearance, "
+                             "cell_reach, max_move, partly_unknown, min_coverage_gain, drop, "
+                             "classify_resolution, " +
+                             kBakeSettingNames + ")");
         }
     }
     return s;

@@ -34,24 +34,14 @@ CloudBakeOptions cloud_bake_options_from(const py::dict& options) {
     for (const auto& item : options) {
         const auto key = py::str(item.first).cast<std::string>();
         const py::handle v = item.second;
-        if (key == "resolution") {
-            o.settings.resolution = v.cast<int>();
-        } else if (key == "splat_scale") {
-            o.settings.splat_scale = v.cast<float>();
-        } else if (key == "hole_fill_texels") {
-            o.settings.hole_fill_texels = v.cast<int>();
-        } else if (key == "max_splat_radius_texels") {
-            o.settings.max_splat_radius_texels = v.cast<int>();
-        } else if (key == "lod_texels") {
-            o.settings.lod_texels = v.cast<float>();
-        } else if (key == "splat_edge_margin") {
-            o.settings.splat_edge_margin = v.cast<float>();
-        } else if (key == "face_the_probe") {
-            o.settings.face_the_probe = v.cast<bool>();
-        } else if (key == "normal_neighbours") {
+        if (set_bake_setting(o.settings, key, v)) {
+            continue;
+        }
+        if (key == "normal_neighbours") {
             o.geometry.normal_neighbours = v.cast<int>();
         } else {
-            throw InputError("bake settings: unknown setting '" + key + "'");
+            throw InputError("bake settings: unknown setting '" + key + "' (expected " +
+                             kBakeSettingNames + ", normal_neighbours)");
         }
     }
     return o;

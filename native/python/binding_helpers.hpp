@@ -15,6 +15,7 @@
 #include "lfprobe/camera.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/json_input.hpp"
+#include "lfprobe/probe_bake.hpp"
 #include "lfprobe/probe_map.hpp"
 #include "lfprobe/probe_placement.hpp"
 #include "lfprobe/probe_set.hpp"
@@ -44,6 +45,34 @@ inline Camera camera_from(const std::string& camera) {
         }
     }
     return read_camera_json(camera);
+}
+
+// The bake settings a binding takes by name in an options dict: BakeSettings' fields, each
+// under its own name (kBakeSettingNames lists them for messages). False for any other key.
+inline constexpr const char* kBakeSettingNames =
+    "resolution, splat_scale, splat_plane_reach, hole_fill_texels, max_splat_radius_texels, "
+    "lod_texels, splat_edge_margin, face_the_probe";
+inline bool set_bake_setting(BakeSettings& s, const std::string& key, pybind11::handle value) {
+    if (key == "resolution") {
+        s.resolution = value.cast<int>();
+    } else if (key == "splat_scale") {
+        s.splat_scale = value.cast<float>();
+    } else if (key == "splat_plane_reach") {
+        s.splat_plane_reach = value.cast<float>();
+    } else if (key == "hole_fill_texels") {
+        s.hole_fill_texels = value.cast<int>();
+    } else if (key == "max_splat_radius_texels") {
+        s.max_splat_radius_texels = value.cast<int>();
+    } else if (key == "lod_texels") {
+        s.lod_texels = value.cast<float>();
+    } else if (key == "splat_edge_margin") {
+        s.splat_edge_margin = value.cast<float>();
+    } else if (key == "face_the_probe") {
+        s.face_the_probe = value.cast<bool>();
+    } else {
+        return false;
+    }
+    return true;
 }
 
 // Three numbers from Python as a point; `what` names the argument in the error.

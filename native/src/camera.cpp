@@ -18,15 +18,15 @@
 #include "lfprobe/camera.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 #include <numbers>
 
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
 #include <nlohmann/json.hpp>
 
+#include "lfprobe/enum_names.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/input_limits.hpp"
 #include "lfprobe/json_input.hpp"
@@ -102,21 +102,16 @@ glm::dvec3 camera_to_panorama(const glm::dvec3& c) {
     return {-c.z, -c.x, c.y};
 }
 
-std::string type_name(CameraType t) {
-    return t == CameraType::Perspective ? "PERSP" : "PANO_EQUIRECT";
-}
-
-std::string fit_name(SensorFit f) {
-    switch (f) {
-    case SensorFit::Horizontal:
-        return "HORIZONTAL";
-    case SensorFit::Vertical:
-        return "VERTICAL";
-    case SensorFit::Auto:
-        break;
-    }
-    return "AUTO";
-}
+// Blender's spellings (bpy.types.Camera.type, .sensor_fit).
+constexpr auto camera_type_names = std::to_array<EnumName<CameraType>>({
+    {CameraType::Perspective, "PERSP"},
+    {CameraType::PanoramaEquirect, "PANO_EQUIRECT"},
+});
+constexpr auto sensor_fit_names = std::to_array<EnumName<SensorFit>>({
+    {SensorFit::Auto, "AUTO"},
+    {SensorFit::Horizontal, "HORIZONTAL"},
+    {SensorFit::Vertical, "VERTICAL"},
+});
 
 [[noreturn]] void bad_key(const std::string& where, const std::string& key,
                           const std::string& expected, const json& got) {
@@ -157,10 +152,8 @@ Camera Camera::from_json(const json& j, const std::string& where) {
     if (j.contains("type")) {
         const json& t = j.at("type");
         const std::string name = t.is_string() ? t.get<std::string>() : "";
-        if (name == "PERSP") {
-            c.type = CameraType::Perspective;
-        } else if (name == "PANO_EQUIRECT") {
-            c.type = CameraType::PanoramaEquirect;
+        if (const auto type = value_named(camera_type_names, name)) {
+            c.type = *type;
         } else if (name == "PANO") {
             // Blender's own spelling: type PANO with a panorama_type (DNA default: fisheye).
             const json pano = j.value("panorama_type", json("FISHEYE_EQUISOLID"));
@@ -227,12 +220,8 @@ Camera Camera::from_json(const json& j, const std::string& where) {
     if (j.contains("sensor_fit")) {
         const json& f = j.at("sensor_fit");
         const std::string name = f.is_string() ? f.get<std::string>() : "";
-        if (name == "AUTO") {
-            c.sensor_fit = SensorFit::Auto;
-        } else if (name == "HORIZONTAL") {
-            c.sensor_fit = SensorFit::Horizontal;
-        } else if (name == "VERTICAL") {
-            c.sensor_fit = SensorFit::Vertical;
+        if (const auto fit = value_named(sensor_fit_names, name)) {
+            c.sensor_fit = *fit;
         } else {
             bad_key(where, "sensor_fit", "\"AUTO\", \"HORIZONTAL\" or \"VERTICAL\"", f);
         }
@@ -272,13 +261,13 @@ json Camera::to_json() const {
         }
         rows.push_back(r);
     }
-    return json{{"type", type_name(type)},
+    return json{{"type", name_of(camera_type_names, type)},
                 {"matrix_world", rows},
                 {"resolution", {width, height}},
                 {"lens", lens},
                 {"sensor_width", sensor_width},
                 {"sensor_height", sensor_height},
-                {"sensor_fit", fit_name(sensor_fit)},
+                {"sensor_fit", name_of(sensor_fit_names, sensor_fit)},
                 {"shift_x", shift_x},
                 {"shift_y", shift_y},
                 {"clip_start", clip_start},
@@ -478,23 +467,7 @@ double Camera::pixels_per_tangent() const {
 }
 
 Camera read_camera_json(const std::string& path) {
-    std::error_code missing;
-    if (!std::filesystem::is_regular_file(path, missing)) {
-        throw MissingFileError(
-            path + ": cannot open the camera file (" +
-            (std::filesystem::exists(path, missing) ? "not a regular file" : "no such file") + ")");
-    }
-    std::ifstream in(path);
-    if (!in) {
-        throw IoError(path + ": cannot open the camera file");
-    }
-    json j;
-    try {
-        j = parse_json(in, path);
-    } catch (const json::exception& e) {
-        throw InputError(path + ": not valid camera JSON (" + e.what() + ")");
-    }
-    return Camera::from_json(j, path);
+    return Camera::from_json(read_json_file(path, "camera file"), path);
 }
 
 Camera Camera::look_at(const glm::dvec3& eye, const glm::dvec3& target, int width, int height,

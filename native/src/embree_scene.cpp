@@ -124,14 +124,20 @@ RTCRayHit make_ray(const Ray& ray) {
     return rh;
 }
 
+// Traces `ray` into `rh`; whether it met a triangle.
+bool cast(RTCScene scene, const Ray& ray, RTCRayHit& rh) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    rh = make_ray(ray);
+    rtcIntersect1(scene, &context, &rh);
+    return rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+}
+
 } // namespace
 
 bool EmbreeScene::intersect_fast(const Ray& ray, float& t, std::uint32_t& triangle) const {
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    RTCRayHit rh = make_ray(ray);
-    rtcIntersect1(impl_->scene, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+    RTCRayHit rh;
+    if (!cast(impl_->scene, ray, rh)) {
         return false;
     }
     t = rh.ray.tfar;
@@ -223,11 +229,8 @@ glm::vec3 EmbreeScene::facing(const glm::vec3& n, const glm::dvec3& direction) {
 
 MeshHit EmbreeScene::intersect(const Ray& ray) const {
     MeshHit out;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
-    RTCRayHit rh = make_ray(ray);
-    rtcIntersect1(impl_->scene, &context, &rh);
-    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) {
+    RTCRayHit rh;
+    if (!cast(impl_->scene, ray, rh)) {
         return out;
     }
     const Mesh& m = *mesh_;

@@ -222,26 +222,24 @@ Mesh read_obj(const std::string& path) {
     std::optional<std::uint32_t> current_material;
     std::optional<std::uint32_t> current_object;
 
-    auto object_id = [&](const std::string& name) {
-        auto found = object_by_name.find(name);
-        if (found == object_by_name.end()) {
-            found =
-                object_by_name.emplace(name, static_cast<std::uint32_t>(mesh.object_names.size()))
-                    .first;
-            mesh.object_names.push_back(name);
+    // The index of the object or material called `name`, appended to `list` when new.
+    const auto index_of = [](std::map<std::string, std::uint32_t>& by_name, auto& list,
+                             const std::string& name, auto&& make) {
+        const auto [found, added] =
+            by_name.try_emplace(name, static_cast<std::uint32_t>(list.size()));
+        if (added) {
+            list.push_back(make());
         }
         return found->second;
     };
+    auto object_id = [&](const std::string& name) {
+        return index_of(object_by_name, mesh.object_names, name, [&] { return name; });
+    };
     auto material_id = [&](const std::string& name) {
-        auto found = material_by_name.find(name);
-        if (found == material_by_name.end()) {
-            // Blender's importer also keeps going with a default material for unknown names.
-            found =
-                material_by_name.emplace(name, static_cast<std::uint32_t>(mesh.materials.size()))
-                    .first;
-            mesh.materials.push_back(Material{name, glm::vec3(0.8f), nullptr});
-        }
-        return found->second;
+        // Blender's importer also keeps going with a default material for unknown names.
+        return index_of(material_by_name, mesh.materials, name, [&] {
+            return Material{name, glm::vec3(0.8f), nullptr};
+        });
     };
 
     for_each_line(text, [&](std::uint64_t line, const std::vector<std::string_view>& t) {

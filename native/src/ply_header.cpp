@@ -8,6 +8,7 @@
 #include <optional>
 #include <string_view>
 
+#include "lfprobe/enum_names.hpp"
 #include "lfprobe/error.hpp"
 #include "scan_parsing.hpp"
 
@@ -15,37 +16,28 @@ namespace lfprobe::detail {
 
 namespace {
 
-struct TypeName {
-    std::string_view name;
-    PlyType type;
-};
-
-constexpr std::array<TypeName, 16> type_names{{
-    {"char", PlyType::Int8},
-    {"uchar", PlyType::UInt8},
-    {"short", PlyType::Int16},
-    {"ushort", PlyType::UInt16},
-    {"int", PlyType::Int32},
-    {"uint", PlyType::UInt32},
-    {"float", PlyType::Float32},
-    {"double", PlyType::Float64},
-    {"int8", PlyType::Int8},
-    {"uint8", PlyType::UInt8},
-    {"int16", PlyType::Int16},
-    {"uint16", PlyType::UInt16},
-    {"int32", PlyType::Int32},
-    {"uint32", PlyType::UInt32},
-    {"float32", PlyType::Float32},
-    {"float64", PlyType::Float64},
-}};
+// The PLY specification's names first (written in messages), then the sized aliases.
+constexpr auto type_names = std::to_array<EnumName<PlyType>>({
+    {PlyType::Int8, "char"},
+    {PlyType::UInt8, "uchar"},
+    {PlyType::Int16, "short"},
+    {PlyType::UInt16, "ushort"},
+    {PlyType::Int32, "int"},
+    {PlyType::UInt32, "uint"},
+    {PlyType::Float32, "float"},
+    {PlyType::Float64, "double"},
+    {PlyType::Int8, "int8"},
+    {PlyType::UInt8, "uint8"},
+    {PlyType::Int16, "int16"},
+    {PlyType::UInt16, "uint16"},
+    {PlyType::Int32, "int32"},
+    {PlyType::UInt32, "uint32"},
+    {PlyType::Float32, "float32"},
+    {PlyType::Float64, "float64"},
+});
 
 [[nodiscard]] std::optional<PlyType> type_from_name(std::string_view name) {
-    for (const TypeName& entry : type_names) {
-        if (entry.name == name) {
-            return entry.type;
-        }
-    }
-    return std::nullopt;
+    return value_named(type_names, name);
 }
 
 [[nodiscard]] std::optional<double> finite_number(std::string_view text) {
@@ -133,25 +125,7 @@ bool ply_type_is_float(PlyType type) {
 }
 
 const char* ply_type_name(PlyType type) {
-    switch (type) {
-    case PlyType::Int8:
-        return "char";
-    case PlyType::UInt8:
-        return "uchar";
-    case PlyType::Int16:
-        return "short";
-    case PlyType::UInt16:
-        return "ushort";
-    case PlyType::Int32:
-        return "int";
-    case PlyType::UInt32:
-        return "uint";
-    case PlyType::Float32:
-        return "float";
-    case PlyType::Float64:
-        return "double";
-    }
-    return "?";
+    return name_of(type_names, type);
 }
 
 bool PlyElement::has_lists() const {

@@ -4,25 +4,21 @@
 
 #include <glm/geometric.hpp>
 
+#include "lfprobe/enum_names.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/octahedral.hpp"
 
 namespace lfprobe {
 
 const char* probe_class_name(ProbeClass c) {
-    switch (c) {
-    case ProbeClass::Useful:
-        return "useful";
-    case ProbeClass::Inside:
-        return "inside";
-    case ProbeClass::TooClose:
-        return "too_close";
-    case ProbeClass::Blind:
-        return "blind";
-    case ProbeClass::Idle:
-        break;
-    }
-    return "idle";
+    static constexpr auto names = std::to_array<EnumName<ProbeClass>>({
+        {ProbeClass::Useful, "useful"},
+        {ProbeClass::Inside, "inside"},
+        {ProbeClass::TooClose, "too_close"},
+        {ProbeClass::Blind, "blind"},
+        {ProbeClass::Idle, "idle"},
+    });
+    return name_of(names, c);
 }
 
 ProbeClassification classify_probe(const ProbeMap& map, const ClassificationSettings& settings) {

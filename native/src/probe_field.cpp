@@ -11,6 +11,7 @@
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
+#include "lfprobe/enum_names.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/grid_walk.hpp"
 #include "lfprobe/probe_blend.hpp"
@@ -135,31 +136,22 @@ void sort_candidates(Candidate* first, std::size_t count) {
     }
 }
 
+constexpr auto field_mode_names = std::to_array<EnumName<FieldMode>>({
+    {FieldMode::Auto, "auto"},
+    {FieldMode::Nearest, "nearest"},
+    {FieldMode::Grid, "grid"},
+});
+
 } // namespace
 
 FieldMode field_mode_from_name(const std::string& name) {
-    if (name == "auto") {
-        return FieldMode::Auto;
-    }
-    if (name == "nearest") {
-        return FieldMode::Nearest;
-    }
-    if (name == "grid") {
-        return FieldMode::Grid;
-    }
-    throw InputError("probe field: mode '" + name + "' is not one of auto, nearest, grid");
+    return value_named_or_throw(field_mode_names, name,
+                                "probe field: mode '" + name +
+                                    "' is not one of auto, nearest, grid");
 }
 
 const char* field_mode_name(FieldMode mode) {
-    switch (mode) {
-    case FieldMode::Nearest:
-        return "nearest";
-    case FieldMode::Grid:
-        return "grid";
-    case FieldMode::Auto:
-        break;
-    }
-    return "auto";
+    return name_of(field_mode_names, mode);
 }
 
 struct ProbeField::RadianceMipCache {

@@ -4,7 +4,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -196,20 +195,7 @@ ProbeSetManifest ProbeSetManifest::from_json(const json& j, const std::string& w
 
 ProbeSetManifest read_manifest(const std::string& folder) {
     const std::string path = (fs::path(folder) / kManifestName).string();
-    std::error_code missing;
-    if (!fs::is_regular_file(path, missing)) {
-        throw MissingFileError(path + ": no probe set manifest here (was the bake finished?)");
-    }
-    std::ifstream in(path);
-    if (!in) {
-        throw IoError(path + ": cannot read the probe set manifest");
-    }
-    json j;
-    try {
-        j = parse_json(in, path);
-    } catch (const json::exception& e) {
-        throw InputError(path + ": invalid JSON (" + e.what() + ")");
-    }
+    const json j = read_json_file(path, "probe set manifest", "was the bake finished?");
     try {
         return ProbeSetManifest::from_json(j, path);
     } catch (const json::exception& e) {

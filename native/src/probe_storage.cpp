@@ -1,6 +1,7 @@
 #include "lfprobe/probe_storage.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <utility>
 
@@ -8,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lfprobe/color.hpp"
+#include "lfprobe/enum_names.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/octahedral.hpp"
 #include "lfprobe/probe_map.hpp"
@@ -36,9 +38,22 @@ ProbeStorage ProbeStorage::from_name(const std::string& name, double step) {
     throw InputError("storage: expected \"full\" or \"compact\", got \"" + name + "\"");
 }
 
+namespace {
+
+constexpr auto radiance_precision_names = std::to_array<EnumName<RadiancePrecision>>({
+    {RadiancePrecision::Half, "half"},
+    {RadiancePrecision::Srgb8, "srgb8"},
+});
+constexpr auto normal_precision_names = std::to_array<EnumName<NormalPrecision>>({
+    {NormalPrecision::Half, "half"},
+    {NormalPrecision::Oct16, "oct16"},
+});
+
+} // namespace
+
 nlohmann::json ProbeStorage::to_json() const {
-    return nlohmann::json{{"radiance", radiance == RadiancePrecision::Srgb8 ? "srgb8" : "half"},
-                          {"normal", normal == NormalPrecision::Oct16 ? "oct16" : "half"},
+    return nlohmann::json{{"radiance", name_of(radiance_precision_names, radiance)},
+                          {"normal", name_of(normal_precision_names, normal)},
                           {"distance_step", distance_step},
                           {"confidence", keep_confidence}};
 }
@@ -52,18 +67,16 @@ ProbeStorage ProbeStorage::from_json(const nlohmann::json& j, const std::string&
     try {
         const std::string radiance = j.value("radiance", std::string("half"));
         const std::string normal = j.value("normal", std::string("half"));
-        if (radiance == "srgb8") {
-            s.radiance = RadiancePrecision::Srgb8;
-        } else if (radiance != "half") {
-            throw InputError(where + ": storage.radiance: expected \"half\" or \"srgb8\", got \"" +
-                             radiance + "\"");
-        }
-        if (normal == "oct16") {
-            s.normal = NormalPrecision::Oct16;
-        } else if (normal != "half") {
-            throw InputError(where + ": storage.normal: expected \"half\" or \"oct16\", got \"" +
-                             normal + "\"");
-        }
+        s.radiance = value_named_or_throw(radiance_precision_names, radiance,
+                                          where +
+                                              ": storage.radiance: expected \"half\" or "
+                                              "\"srgb8\", got \"" +
+                                              radiance + "\"");
+        s.normal = value_named_or_throw(normal_precision_names, normal,
+                                        where +
+                                            ": storage.normal: expected \"half\" or "
+                                            "\"oct16\", got \"" +
+                                            normal + "\"");
         s.distance_step = j.value("distance_step", 0.0);
         s.keep_confidence = j.value("confidence", true);
     } catch (const nlohmann::json::exception& e) {

@@ -10,6 +10,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "lfprobe/enum_names.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/probe_lookup.hpp"
 #include "texel_verdict.hpp"
@@ -747,15 +748,12 @@ private:
 } // namespace
 
 const char* trace_status_name(TraceStatus status) {
-    switch (status) {
-    case TraceStatus::Miss:
-        return "MISS";
-    case TraceStatus::Hit:
-        return "HIT";
-    case TraceStatus::Unknown:
-        break;
-    }
-    return "UNKNOWN";
+    static constexpr auto names = std::to_array<EnumName<TraceStatus>>({
+        {TraceStatus::Miss, "MISS"},
+        {TraceStatus::Hit, "HIT"},
+        {TraceStatus::Unknown, "UNKNOWN"},
+    });
+    return name_of(names, status);
 }
 
 double surface_thickness(const TraceSettings& settings, double distance, int n) {

@@ -6,34 +6,29 @@
 
 #include <glm/geometric.hpp>
 
+#include "lfprobe/enum_names.hpp"
 #include "lfprobe/error.hpp"
 
 namespace lfprobe {
 
+namespace {
+
+constexpr auto radiance_filter_names = std::to_array<EnumName<RadianceFilter>>({
+    {RadianceFilter::Nearest, "nearest"},
+    {RadianceFilter::Bilinear, "bilinear"},
+    {RadianceFilter::Footprint, "footprint"},
+});
+
+} // namespace
+
 RadianceFilter radiance_filter_from_name(const std::string& name) {
-    if (name == "nearest") {
-        return RadianceFilter::Nearest;
-    }
-    if (name == "bilinear") {
-        return RadianceFilter::Bilinear;
-    }
-    if (name == "footprint") {
-        return RadianceFilter::Footprint;
-    }
-    throw InputError("radiance filter must be \"nearest\", \"bilinear\" or \"footprint\", got \"" +
-                     name + "\"");
+    return value_named_or_throw(
+        radiance_filter_names, name,
+        "radiance filter must be \"nearest\", \"bilinear\" or \"footprint\", got \"" + name + "\"");
 }
 
 const char* radiance_filter_name(RadianceFilter filter) {
-    switch (filter) {
-    case RadianceFilter::Bilinear:
-        return "bilinear";
-    case RadianceFilter::Footprint:
-        return "footprint";
-    case RadianceFilter::Nearest:
-        break;
-    }
-    return "nearest";
+    return name_of(radiance_filter_names, filter);
 }
 
 double footprint_in_texels(double eye_distance, double sample_angle, double probe_distance, int n) {

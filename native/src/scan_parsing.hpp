@@ -19,6 +19,7 @@
 #include <glm/vec3.hpp>
 
 #include "lfprobe/color.hpp"
+#include "lfprobe/enum_names.hpp"
 
 namespace lfprobe::detail {
 
@@ -48,82 +49,56 @@ inline constexpr std::size_t channel_count = 11;
            });
 }
 
-// The channel a column header or PLY property name stands for, case-insensitive; nullopt
-// for names no reader knows.
+// Every name a column header or PLY property may give a channel, case-insensitive; the first
+// row for a channel is the name messages use.
+inline constexpr auto channel_names = std::to_array<EnumName<Channel>>({
+    {Channel::X, "x"},
+    {Channel::Y, "y"},
+    {Channel::Z, "z"},
+    {Channel::Intensity, "intensity"},
+    {Channel::Red, "red"},
+    {Channel::Green, "green"},
+    {Channel::Blue, "blue"},
+    {Channel::NormalX, "nx"},
+    {Channel::NormalY, "ny"},
+    {Channel::NormalZ, "nz"},
+    {Channel::Intensity, "i"},
+    {Channel::Intensity, "reflectance"},
+    {Channel::Intensity, "scalar_intensity"},
+    {Channel::Intensity, "scalar_reflectance"},
+    {Channel::Intensity, "intensities"},
+    {Channel::Intensity, "remission"},
+    {Channel::Red, "r"},
+    {Channel::Green, "g"},
+    {Channel::Blue, "b"},
+    {Channel::Red, "diffuse_red"},
+    {Channel::Green, "diffuse_green"},
+    {Channel::Blue, "diffuse_blue"},
+    // CloudCompare names float colours Rf Gf Bf.
+    {Channel::Red, "rf"},
+    {Channel::Green, "gf"},
+    {Channel::Blue, "bf"},
+    {Channel::NormalX, "normal_x"},
+    {Channel::NormalY, "normal_y"},
+    {Channel::NormalZ, "normal_z"},
+    {Channel::NormalX, "normalx"},
+    {Channel::NormalY, "normaly"},
+    {Channel::NormalZ, "normalz"},
+    {Channel::Ignore, "_"},
+});
+
+// The channel a column header or PLY property name stands for; nullopt for names no reader
+// knows.
 [[nodiscard]] inline std::optional<Channel> channel_from_name(std::string_view name) {
-    struct Alias {
-        std::string_view name;
-        Channel channel;
-    };
-    static constexpr auto aliases = std::to_array<Alias>({
-        {"x", Channel::X},
-        {"y", Channel::Y},
-        {"z", Channel::Z},
-        {"i", Channel::Intensity},
-        {"intensity", Channel::Intensity},
-        {"reflectance", Channel::Intensity},
-        {"scalar_intensity", Channel::Intensity},
-        {"r", Channel::Red},
-        {"g", Channel::Green},
-        {"b", Channel::Blue},
-        {"red", Channel::Red},
-        {"green", Channel::Green},
-        {"blue", Channel::Blue},
-        {"diffuse_red", Channel::Red},
-        {"diffuse_green", Channel::Green},
-        {"diffuse_blue", Channel::Blue},
-        // CloudCompare names float colours Rf Gf Bf.
-        {"rf", Channel::Red},
-        {"gf", Channel::Green},
-        {"bf", Channel::Blue},
-        {"nx", Channel::NormalX},
-        {"ny", Channel::NormalY},
-        {"nz", Channel::NormalZ},
-        {"normal_x", Channel::NormalX},
-        {"normal_y", Channel::NormalY},
-        {"normal_z", Channel::NormalZ},
-        {"normalx", Channel::NormalX},
-        {"normaly", Channel::NormalY},
-        {"normalz", Channel::NormalZ},
-        {"_", Channel::Ignore},
-        {"scalar_reflectance", Channel::Intensity},
-        {"intensities", Channel::Intensity},
-        {"remission", Channel::Intensity},
-    });
-    for (const Alias& alias : aliases) {
-        if (equals_ignoring_case(alias.name, name)) {
-            return alias.channel;
-        }
-    }
-    return std::nullopt;
+    const auto row =
+        std::find_if(channel_names.begin(), channel_names.end(), [&](const EnumName<Channel>& r) {
+            return equals_ignoring_case(r.name, name);
+        });
+    return row == channel_names.end() ? std::nullopt : std::optional<Channel>(row->value);
 }
 
 [[nodiscard]] inline const char* channel_name(Channel channel) {
-    switch (channel) {
-    case Channel::X:
-        return "x";
-    case Channel::Y:
-        return "y";
-    case Channel::Z:
-        return "z";
-    case Channel::Intensity:
-        return "intensity";
-    case Channel::Red:
-        return "red";
-    case Channel::Green:
-        return "green";
-    case Channel::Blue:
-        return "blue";
-    case Channel::NormalX:
-        return "nx";
-    case Channel::NormalY:
-        return "ny";
-    case Channel::NormalZ:
-        return "nz";
-    case Channel::Ignore:
-        break;
-    }
-    return "ignored";
+    return channel == Channel::Ignore ? "ignored" : name_of(channel_names, channel);
 }
 
 // Where each channel sits among the columns (or properties), -1 when absent.

@@ -44,18 +44,28 @@ def room_faces():
     return faces
 
 
+def face_corners(axis: int, w: float, bmin, bmax):
+    """The four corners of a box face (as room_faces gives it), in order around the face: the
+    face's two other axes u, v = axis+1, axis+2 (mod 3) go (min, min), (max, min), (max, max),
+    (min, max)."""
+    u, v = (axis + 1) % 3, (axis + 2) % 3
+    corners = []
+    for a, b in ((0, 0), (1, 0), (1, 1), (0, 1)):
+        p = [0.0, 0.0, 0.0]
+        p[axis] = w
+        p[u] = (bmin[u], bmax[u])[a]
+        p[v] = (bmin[v], bmax[v])[b]
+        corners.append(p)
+    return corners
+
+
 def write_room_obj(path: str) -> None:
     """The benchmark room as a mesh (two triangles per box face), the reference geometry that
     Embree traces for the probe-versus-Embree ratio."""
     lines = ["# lfprobe benchmark room"]
     vertex = 0
     for axis, w, bmin, bmax, _, _ in room_faces():
-        u, v = (axis + 1) % 3, (axis + 2) % 3
-        for a, b in ((0, 0), (1, 0), (1, 1), (0, 1)):
-            p = [0.0, 0.0, 0.0]
-            p[axis] = w
-            p[u] = (bmin[u], bmax[u])[a]
-            p[v] = (bmin[v], bmax[v])[b]
+        for p in face_corners(axis, w, bmin, bmax):
             lines.append(f"v {p[0]:.6f} {p[1]:.6f} {p[2]:.6f}")
         lines.append(f"f {vertex + 1} {vertex + 2} {vertex + 3}")
         lines.append(f"f {vertex + 1} {vertex + 3} {vertex + 4}")

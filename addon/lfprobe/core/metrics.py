@@ -208,6 +208,17 @@ def compare_images(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
     return compare_images_with_map(ref, test, ppd)[0]
 
 
+def _colour_figures(ref_rgb: np.ndarray, test_rgb: np.ndarray,
+                    ppd: float) -> Tuple[Dict[str, object], np.ndarray]:
+    """({psnr, ssim, flip}, FLIP error map) of two colour images; ssim None under its window."""
+    try:
+        ssim_value: Optional[float] = ssim(ref_rgb, test_rgb)
+    except ValueError:
+        ssim_value = None
+    flip_mean, error_map = flip(ref_rgb, test_rgb, ppd)
+    return {"psnr": psnr(ref_rgb, test_rgb), "ssim": ssim_value, "flip": flip_mean}, error_map
+
+
 def compare_images_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
                             ppd: float = _flip.DEFAULT_PPD) -> Tuple[Dict[str, object], np.ndarray]:
     """(metrics, FLIP error map) between a ground-truth and a test image (read_image dicts of one size).
@@ -223,23 +234,16 @@ def compare_images_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarr
         raise ValueError(f"images differ in size: reference {w0}×{h0}, test {w1}×{h1}")
     height, width = ref["rgba"].shape[:2]
     ref_rgb, test_rgb = visible_colour(ref), visible_colour(test)
-    try:
-        ssim_value: Optional[float] = ssim(ref_rgb, test_rgb)
-    except ValueError:
-        ssim_value = None
-    flip_mean, error_map = flip(ref_rgb, test_rgb, ppd)
+    result, error_map = _colour_figures(ref_rgb, test_rgb, ppd)
     ref_hit, test_hit = ref["status"] == STATUS_HIT, test["status"] == STATUS_HIT
     depth = depth_errors(ref["depth"], test["depth"], ref_hit, test_hit)
-    result: Dict[str, object] = {
-        "psnr": psnr(ref_rgb, test_rgb),
-        "ssim": ssim_value,
-        "flip": flip_mean,
+    result.update({
         "depth_absrel": depth["absrel"],
         "depth_rmse": depth["rmse"],
         "depth_pixels": depth["pixels"],
         "psnr_answered": psnr_over(ref_rgb, test_rgb, test["status"] != STATUS_UNKNOWN),
         "wrong_surface_rate": wrong_surface_rate(ref["depth"], test["depth"], ref_hit, test_hit),
-    }
+    })
     result.update(confusion(ref["status"], test["status"]))
     result.update({"width": int(width), "height": int(height), "ppd": float(ppd),
                    "definitions": dict(DEFINITIONS)})
@@ -292,15 +296,8 @@ def compare_colour_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarr
         return np.asarray(image["rgba"], dtype=np.float64)[..., :3]
 
     ref_rgb, test_rgb = colour(ref), colour(test)
-    try:
-        ssim_value: Optional[float] = ssim(ref_rgb, test_rgb)
-    except ValueError:
-        ssim_value = None
-    flip_mean, error_map = flip(ref_rgb, test_rgb, ppd)
-    result: Dict[str, object] = {
-        "psnr": psnr(ref_rgb, test_rgb),
-        "ssim": ssim_value,
-        "flip": flip_mean,
+    result, error_map = _colour_figures(ref_rgb, test_rgb, ppd)
+    result.update({
         "depth_absrel": None,
         "depth_rmse": None,
         "depth_pixels": None,
@@ -314,5 +311,5 @@ def compare_colour_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarr
         "counts": None,
         "width": int(width), "height": int(height), "ppd": float(ppd),
         "definitions": dict(DEFINITIONS),
-    }
+    })
     return result, error_map

@@ -17,4 +17,10 @@ inline constexpr int kMaxJsonDepth = 64;
 [[nodiscard]] nlohmann::json parse_json(std::istream& text, const std::string& where);
 [[nodiscard]] nlohmann::json parse_json(const std::string& text, const std::string& where);
 
+// The JSON document in the file at `path`; `what` names the file in messages ("camera file").
+// MissingFileError when `path` is not a regular file (`missing_hint`, when given, says why it
+// may be missing), IoError when it cannot be read, InputError for invalid or too deep JSON.
+[[nodiscard]] nlohmann::json read_json_file(const std::string& path, const std::string& what,
+                                            const std::string& missing_hint = "");
+
 } // namespace lfprobe

@@ -100,20 +100,15 @@ struct Texel {
 // mirrored (texel (x, -1) is texel (N-1-x, 0)), so neighbourhoods may step over it. Any offset
 // of less than N texels outside the map is folded back inside.
 [[nodiscard]] inline Texel wrap_texel(int x, int y, int n) {
-    if (x < 0) {
-        x = -x - 1;
-        y = n - 1 - y;
-    } else if (x >= n) {
-        x = 2 * n - 1 - x;
-        y = n - 1 - y;
-    }
-    if (y < 0) {
-        y = -y - 1;
-        x = n - 1 - x;
-    } else if (y >= n) {
-        y = 2 * n - 1 - y;
-        x = n - 1 - x;
-    }
+    // Folds coordinate `a` back over the edge it crossed; the other coordinate `b` mirrors.
+    const auto fold = [n](int& a, int& b) {
+        if (a < 0 || a >= n) {
+            a = a < 0 ? -a - 1 : 2 * n - 1 - a;
+            b = n - 1 - b;
+        }
+    };
+    fold(x, y);
+    fold(y, x);
     return Texel{std::clamp(x, 0, n - 1), std::clamp(y, 0, n - 1)};
 }
 

@@ -18,7 +18,7 @@ _ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(os.path.
 if os.path.join(_ROOT, "addon") not in sys.path:
     sys.path.insert(0, os.path.join(_ROOT, "addon"))
 
-from lfprobe.core.bench import room_faces  # noqa: E402
+from lfprobe.core.bench import face_corners, room_faces  # noqa: E402
 from lfprobe.core.compare import write_png  # noqa: E402
 
 # Linear base colours of the boxes in bench.ROOM_BOXES order: shell, table, table, column.
@@ -60,11 +60,7 @@ def write_room(folder: str, name: str = "room") -> str:
             lines.append(f"o {MATERIALS[box][0]}")
             lines.append(f"usemtl {MATERIALS[box][0]}")
         u, v = (axis + 1) % 3, (axis + 2) % 3
-        for a, b in ((0, 0), (1, 0), (1, 1), (0, 1)):
-            p = [0.0, 0.0, 0.0]
-            p[axis] = w
-            p[u] = (bmin[u], bmax[u])[a]
-            p[v] = (bmin[v], bmax[v])[b]
+        for p in face_corners(axis, w, bmin, bmax):
             lines.append(f"v {p[0]:.6f} {p[1]:.6f} {p[2]:.6f}")
             scale = TEXELS_PER_METRE / TEXTURE_SIZE
             lines.append(f"vt {p[u] * scale:.6f} {p[v] * scale:.6f}")
