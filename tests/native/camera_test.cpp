@@ -273,7 +273,8 @@ TEST(Camera, JsonRoundTripsAndBadJsonNamesTheFileAndTheKey) {
               std::string::npos);
     EXPECT_NE(message_of(R"({"clip_start": 5, "clip_end": 1})").find("'clip_end'"),
               std::string::npos);
-    EXPECT_NE(message_of(R"({"lens": 50,)").find("camera file is not valid JSON"), std::string::npos);
+    EXPECT_NE(message_of(R"({"lens": 50,)").find("camera file is not valid JSON"),
+              std::string::npos);
     EXPECT_NE(message_of(R"([1, 2, 3])").find("JSON object"), std::string::npos);
     EXPECT_THROW((void)read_camera_json("/nonexistent/lfprobe/camera.json"), IoError);
 }
