@@ -13,82 +13,17 @@
 #include "lfprobe/enum_names.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/probe_lookup.hpp"
+#include "octant_walk.hpp"
 #include "texel_verdict.hpp"
 
 namespace lfprobe {
 
 using namespace texel_verdict;
+using namespace octant_walk;
 
 namespace {
 
 constexpr int kMaxLevels = 32;
-// Texel units: how far from a texel edge a map coordinate must be for its texel to be taken
-// without comparing crossing times.
-constexpr double kEdgeMargin = 1e-4;
-
-[[nodiscard]] double sign_not_zero(double a) {
-    return a >= 0.0 ? 1.0 : -1.0;
-}
-
-[[nodiscard]] int sign_of(double a) {
-    return a > 0.0 ? 1 : (a < 0.0 ? -1 : 0);
-}
-
-// std::floor and std::round of a map coordinate g = (p + 1) N / 2, which lies in [0, N]: on
-// baseline x86-64 both are libm calls, in the walk's every skip. For g >= 0 truncation is the
-// floor, and g - floor(g) is exact (Sterbenz), so halves go up as std::round's do.
-[[nodiscard]] int floor_of_coordinate(double g) {
-    return static_cast<int>(g);
-}
-[[nodiscard]] double round_of_coordinate(double g) {
-    const double whole = static_cast<double>(static_cast<int>(g));
-    return g - whole >= 0.5 ? whole + 1.0 : whole;
-}
-
-// One map coordinate (u or v) inside one octant, as a function of the ray parameter:
-// p(t) = (num0 + t num1) / (den0 + t den1), the octahedral p = 2u − 1 of docs/DESIGN.md §3 with the
-// octant's signs fixed, which makes numerator and denominator (the L1 norm) linear in t.
-struct OctantCoordinate {
-    double num0 = 0.0;
-    double num1 = 0.0;
-    int step = 0; // +1, −1: the coordinate grows or shrinks along the ray; 0: constant
-};
-
-struct OctantMap {
-    OctantCoordinate u;
-    OctantCoordinate v;
-    double den0 = 0.0;
-    double den1 = 0.0;
-};
-
-// The ray's image in the map over one piece. Inside an octant the map is a central projection,
-// so the image is a straight segment: g(λ) = ga + λ (gb − ga) in texel units, λ in [0, 1] from
-// the piece's start to its end (λ is a linear-fractional function of t, increasing). Which
-// texel edge the walk meets first, and where the other coordinate is when it does, are then a
-// multiply-add each instead of a division per edge; the times the walk keeps are still the
-// exact plane crossings, and where two events are closer than the image's rounding (a texel
-// corner, an edge at the piece's end) the walk compares those crossing times instead.
-struct OctantImage {
-    bool usable = false;
-    double ga_u = 0.0;
-    double ga_v = 0.0;
-    double du = 0.0; // gb − ga
-    double dv = 0.0;
-    double inv_u = 0.0; // 1 / du; 0 for a coordinate that does not move
-    double inv_v = 0.0;
-    double error = 0.0; // bound on the rounding of ga and gb, texels
-};
-
-// What comes first along the image: an edge of u (axis 0) or v (axis 1), the piece's end, or
-// a tie that the crossing times must settle.
-constexpr int kPieceEnd = -1;
-constexpr int kTie = -2;
-struct Event {
-    int axis = kTie;
-    int edge = -1;
-    double lambda = 0.0;       // where along the image
-    double lambda_error = 0.0; // how far off that may be
-};
 
 // A texel the ray passed just in front of (within the thickness): the hit if the ray then
 // turns up behind the next surface.
@@ -104,15 +39,13 @@ class Tracer {
 public:
     Tracer(const ProbeMap& map, const MinDistancePyramid* levels, const glm::dvec3& origin,
            const glm::dvec3& direction, const TraceSettings& settings)
-        : map_(map), n_(map.resolution), o_(origin), d_(direction), settings_(settings) {
+        : map_(map), n_(map.resolution), o_(origin), d_(direction),
+          ray_(origin, direction, map.resolution), settings_(settings) {
         b_ = glm::dot(o_, d_);
         const glm::dvec3 closest = o_ - b_ * d_;
         perp2_ = glm::dot(closest, closest);
         origin_length_ = glm::length(o_);
         texel_scale_ = thickness_per_metre(settings, n_);
-        two_over_n_ = 2.0 / static_cast<double>(n_);
-        o_l1_ = std::abs(o_.x) + std::abs(o_.y) + std::abs(o_.z);
-        d_l1_ = std::abs(d_.x) + std::abs(d_.y) + std::abs(d_.z);
         if (levels != nullptr && settings.use_coarse_levels && texel_scale_ < 1.0) {
             levels_ = &levels->levels();
             level_count_ = std::min(static_cast<int>(levels_->size()), kMaxLevels);
@@ -163,23 +96,11 @@ public:
 
     // Walks the piece [ta, tb] that stays in the octant of signs `s`; true when decided.
     bool walk_piece(double ta, double tb, const glm::dvec3& s) {
-        const bool lower = s.z < 0.0;
-        OctantMap m;
-        m.den0 = glm::dot(s, o_);
-        m.den1 = glm::dot(s, d_);
-        // Upper hemisphere: p = (x, y) / L1. Lower: p = ((x − s_x z), (y − s_y z)) / L1.
-        m.u.num0 = o_.x - (lower ? s.x * o_.z : 0.0);
-        m.u.num1 = d_.x - (lower ? s.x * d_.z : 0.0);
-        m.v.num0 = o_.y - (lower ? s.y * o_.z : 0.0);
-        m.v.num1 = d_.y - (lower ? s.y * d_.z : 0.0);
-        m.u.step = sign_of(m.u.num1 * m.den0 - m.u.num0 * m.den1);
-        m.v.step = sign_of(m.v.num1 * m.den0 - m.v.num0 * m.den1);
-
-        piece_start_ = ta;
-        int x = start_index(m, m.u, ta);
-        int y = start_index(m, m.v, ta);
+        const OctantPiece m(ray_, s, ta);
+        int x = m.start_index(m.u, ta);
+        int y = m.start_index(m.v, ta);
         double t = ta;
-        const OctantImage image = image_of(m, ta, tb);
+        const OctantImage image = m.image_of(ta, tb, settings_.order_by_image);
 
         std::array<int, kMaxLevels> memo_x;
         std::array<int, kMaxLevels> memo_y;
@@ -230,13 +151,14 @@ public:
                 continue;
             }
             // The texel's exit: the first of its two forward edges and the piece's end.
-            const Event next = first_event(image, next_edge(m.u, x), next_edge(m.v, y));
+            const Event next =
+                OctantPiece::first_event(image, m.next_edge(m.u, x), m.next_edge(m.v, y));
             double t_next = kInf;
             bool step_x = false;
             bool step_y = false;
             bool decided = false;
             if (next.axis >= 0) {
-                const double t_edge = crossing(m, next.axis == 0 ? m.u : m.v, next.edge);
+                const double t_edge = m.crossing(next.axis == 0 ? m.u : m.v, next.edge);
                 if (t_edge <= tb) {
                     t_next = std::max(t_edge, t);
                     step_x = next.axis == 0;
@@ -248,8 +170,8 @@ public:
                 decided = true;
             }
             if (!decided) {
-                const double tnx = next_crossing(m, m.u, x);
-                const double tny = next_crossing(m, m.v, y);
+                const double tnx = m.next_crossing(m.u, x);
+                const double tny = m.next_crossing(m.v, y);
                 t_next = std::max(std::min({tnx, tny, tb}), t);
                 step_x = tnx <= t_next;
                 step_y = tny <= t_next;
@@ -280,9 +202,10 @@ public:
     // Skips coarse cell (cx, cy) of `shift` (2^shift texels a side) when nothing in it can stop
     // the ray, moving (x, y, t) to where the fine walk would be when it leaves the cell.
     // The ray is at squared distance here2 from the probe at t; clear2 is the cell's clear2_of.
-    Move skip_cell(const OctantMap& m, const OctantImage& image, double clear2, double here2,
+    Move skip_cell(const OctantPiece& m, const OctantImage& image, double clear2, double here2,
                    int cx, int cy, int shift, int& x, int& y, double& t, double tb) {
-        const Event exit = first_event(image, exit_edge(m.u, cx, shift), exit_edge(m.v, cy, shift));
+        const Event exit = OctantPiece::first_event(image, m.exit_edge(m.u, cx, shift),
+                                                    m.exit_edge(m.v, cy, shift));
         if (exit.axis == kPieceEnd) {
             const double t_end = std::max(tb, t);
             if (!skippable(clear2, here2, t_end)) {
@@ -296,7 +219,7 @@ public:
         if (exit.axis >= 0) {
             const bool along_u = exit.axis == 0;
             const OctantCoordinate& c = along_u ? m.u : m.v;
-            const double t_edge = crossing(m, c, exit.edge);
+            const double t_edge = m.crossing(c, exit.edge);
             if (t_edge <= tb) {
                 const double t_exit = std::max(t_edge, t);
                 if (!skippable(clear2, here2, t_exit)) {
@@ -304,14 +227,14 @@ public:
                 }
                 // The exit axis enters the texel past the cell's edge; the other is wherever
                 // the image is there, settled by crossing times when that is next to an edge.
-                const int entered = exit_texel(c, along_u ? cx : cy, shift);
+                const int entered = m.exit_texel(c, along_u ? cx : cy, shift);
                 if (along_u) {
-                    y = land(m, m.v, y, t_exit, image.ga_v + exit.lambda * image.dv,
-                             exit.lambda_error * std::abs(image.dv) + image.error);
+                    y = m.land(m.v, y, t_exit, image.ga_v + exit.lambda * image.dv,
+                               exit.lambda_error * std::abs(image.dv) + image.error);
                     x = entered;
                 } else {
-                    x = land(m, m.u, x, t_exit, image.ga_u + exit.lambda * image.du,
-                             exit.lambda_error * std::abs(image.du) + image.error);
+                    x = m.land(m.u, x, t_exit, image.ga_u + exit.lambda * image.du,
+                               exit.lambda_error * std::abs(image.du) + image.error);
                     y = entered;
                 }
                 if (t_exit > t) {
@@ -322,8 +245,8 @@ public:
             }
         }
         // A tie, or an image too ill-conditioned to decide: every crossing time compared.
-        const double exit_x = cell_exit(m, m.u, cx, shift);
-        const double exit_y = cell_exit(m, m.v, cy, shift);
+        const double exit_x = m.cell_exit(m.u, cx, shift);
+        const double exit_y = m.cell_exit(m.v, cy, shift);
         const double t_exit = std::max(std::min({exit_x, exit_y, tb}), t);
         if (!skippable(clear2, here2, t_exit)) {
             return Move::Stay;
@@ -331,9 +254,9 @@ public:
         // Along the axis whose cell edge ends the skip, the landing texel is next to that
         // edge: the search starts there.
         const int nx =
-            advance(m, m.u, x, t_exit, exit_x == t_exit ? exit_texel(m.u, cx, shift) : -1);
+            m.advance(m.u, x, t_exit, exit_x == t_exit ? m.exit_texel(m.u, cx, shift) : -1);
         const int ny =
-            advance(m, m.v, y, t_exit, exit_y == t_exit ? exit_texel(m.v, cy, shift) : -1);
+            m.advance(m.v, y, t_exit, exit_y == t_exit ? m.exit_texel(m.v, cy, shift) : -1);
         if (!(t_exit > t || nx != x || ny != y)) {
             return Move::Stay;
         }
@@ -347,131 +270,6 @@ public:
         y = ny;
         t = t_exit;
         return Move::Moved;
-    }
-
-    // The image's endpoints at ta and tb; not usable where the L1 norm cancels (the ray passing
-    // next to the probe centre) or a coordinate moves against its step.
-    [[nodiscard]] OctantImage image_of(const OctantMap& m, double ta, double tb) const {
-        OctantImage image;
-        if (!settings_.order_by_image) {
-            return image;
-        }
-        double gb_u = 0.0;
-        double gb_v = 0.0;
-        double kappa_a = 0.0;
-        double kappa_b = 0.0;
-        if (!image_point(m, ta, image.ga_u, image.ga_v, kappa_a) ||
-            !image_point(m, tb, gb_u, gb_v, kappa_b)) {
-            return image;
-        }
-        image.du = gb_u - image.ga_u;
-        image.dv = gb_v - image.ga_v;
-        // A quotient of sums of two products: a few ulps of the larger terms, which are
-        // kappa times the L1 norm; in texels, times N.
-        image.error = 8.0 * std::numeric_limits<double>::epsilon() * std::max(kappa_a, kappa_b) *
-                      static_cast<double>(n_);
-        image.usable = moves_with_step(m.u, image.du, image.inv_u) &&
-                       moves_with_step(m.v, image.dv, image.inv_v);
-        return image;
-    }
-
-    // Texel coordinates of the image at t (t = +inf: the direction's own texel), and how
-    // ill-conditioned they are (the terms' magnitude over the L1 norm); false past 1e6.
-    [[nodiscard]] bool image_point(const OctantMap& m, double t, double& gu, double& gv,
-                                   double& kappa) const {
-        double den;
-        double nu;
-        double nv;
-        double magnitude;
-        if (std::isinf(t)) {
-            if (t < 0.0) {
-                return false;
-            }
-            den = m.den1;
-            nu = m.u.num1;
-            nv = m.v.num1;
-            magnitude = d_l1_;
-        } else {
-            den = m.den0 + t * m.den1;
-            nu = m.u.num0 + t * m.u.num1;
-            nv = m.v.num0 + t * m.v.num1;
-            magnitude = o_l1_ + std::abs(t) * d_l1_;
-        }
-        if (!(den > 0.0) || !(den * 1e6 > magnitude)) {
-            return false;
-        }
-        kappa = magnitude / den;
-        const double half_n = 0.5 * static_cast<double>(n_);
-        const double scale = half_n / den;
-        gu = nu * scale + half_n;
-        gv = nv * scale + half_n;
-        return true;
-    }
-
-    // 1 / delta for a coordinate that moves the way the walk steps it (0 when it does not
-    // step); false when the image disagrees with the step.
-    [[nodiscard]] static bool moves_with_step(const OctantCoordinate& c, double delta,
-                                              double& inverse) {
-        inverse = 0.0;
-        if (c.step == 0) {
-            return true;
-        }
-        if (c.step > 0 ? !(delta > 0.0) : !(delta < 0.0)) {
-            return false;
-        }
-        inverse = 1.0 / delta;
-        return std::isfinite(inverse);
-    }
-
-    // The edge the walk crosses leaving texel `index` along `c`; −1 at the map's border or
-    // when the coordinate does not move.
-    [[nodiscard]] int next_edge(const OctantCoordinate& c, int index) const {
-        if (c.step > 0) {
-            return index + 1 < n_ ? index + 1 : -1;
-        }
-        if (c.step < 0) {
-            return index > 0 ? index : -1;
-        }
-        return -1;
-    }
-
-    // The first of edge `eu` of u, edge `ev` of v (−1: none) and the piece's end along the
-    // image; kTie when they are closer than the image's rounding or the image is not usable.
-    [[nodiscard]] static Event first_event(const OctantImage& image, int eu, int ev) {
-        Event event;
-        if (!image.usable) {
-            return event;
-        }
-        const double lu = eu >= 0 ? (static_cast<double>(eu) - image.ga_u) * image.inv_u : kInf;
-        const double lv = ev >= 0 ? (static_cast<double>(ev) - image.ga_v) * image.inv_v : kInf;
-        // An edge's λ is off by the endpoints' error over the coordinate's extent, twice.
-        const double eu_error = 4.0 * image.error * std::abs(image.inv_u);
-        const double ev_error = 4.0 * image.error * std::abs(image.inv_v);
-        if (lu + eu_error < lv - ev_error && lu + eu_error < 1.0) {
-            event = Event{0, eu, lu, eu_error};
-        } else if (lv + ev_error < lu - eu_error && lv + ev_error < 1.0) {
-            event = Event{1, ev, lv, ev_error};
-        } else if (1.0 < lu - eu_error && 1.0 < lv - ev_error) {
-            event.axis = kPieceEnd;
-        }
-        return event;
-    }
-
-    // The index of coordinate `c` at t_exit, given its image coordinate g there (off by at
-    // most g_error): the texel under g when that is clear of every edge, else the crossing
-    // times decide (advance).
-    [[nodiscard]] int land(const OctantMap& m, const OctantCoordinate& c, int index, double t_exit,
-                           double g, double g_error) const {
-        if (c.step == 0) {
-            return index;
-        }
-        const int guess = floor_of_coordinate(std::max(g, 0.0));
-        const double from_edge = std::abs(g - round_of_coordinate(std::max(g, 0.0)));
-        if (from_edge > g_error && g > 0.0 && g < static_cast<double>(n_) &&
-            (c.step > 0 ? guess >= index : guess <= index)) {
-            return guess;
-        }
-        return advance(m, c, index, t_exit);
     }
 
     // Passing through the ball around the probe centre, the ray forgets a surface it passed
@@ -499,159 +297,6 @@ private:
     }
     [[nodiscard]] double thickness(double r) const {
         return settings_.thickness + texel_scale_ * r;
-    }
-
-    // The ray parameter where coordinate `c` crosses texel edge `edge` (u or v = edge / N):
-    // the plane through the probe centre with normal grad(num) − a grad(den), a = 2 edge/N − 1.
-    // +inf when the ray meets that plane outside this octant (the other branch of p(t)).
-    [[nodiscard]] double plane_crossing(const OctantMap& m, const OctantCoordinate& c,
-                                        int edge) const {
-        // A product, not a quotient: exact for power-of-two N, and this is the walk's hot path.
-        const double a = static_cast<double>(edge) * two_over_n_ - 1.0;
-        const double denominator = c.num1 - a * m.den1;
-        if (denominator == 0.0) {
-            return kInf;
-        }
-        const double t = (a * m.den0 - c.num0) / denominator;
-        // Where the L1 norm is not positive the plane is met outside this octant.
-        return m.den0 + t * m.den1 > 0.0 ? t : kInf;
-    }
-    // The crossing as the walk sees it: an edge crossed before the piece started is behind the
-    // walk already (the start index accounts for it), not ahead.
-    [[nodiscard]] double crossing(const OctantMap& m, const OctantCoordinate& c, int edge) const {
-        const double t = plane_crossing(m, c, edge);
-        return t < piece_start_ ? kInf : t;
-    }
-
-    // When the walk leaves texel `index` along `c` (the next edge in the step's direction).
-    [[nodiscard]] double next_crossing(const OctantMap& m, const OctantCoordinate& c,
-                                       int index) const {
-        if (c.step > 0) {
-            return index + 1 < n_ ? crossing(m, c, index + 1) : kInf;
-        }
-        if (c.step < 0) {
-            return index > 0 ? crossing(m, c, index) : kInf;
-        }
-        return kInf;
-    }
-
-    // The texel edge through which the walk leaves coarse cell `cell` (fine texels
-    // [cell << shift, (cell+1) << shift)) in its step's direction; −1 when that edge is the
-    // map's border or the coordinate does not move.
-    [[nodiscard]] int exit_edge(const OctantCoordinate& c, int cell, int shift) const {
-        if (c.step > 0) {
-            const int edge = (cell + 1) << shift;
-            return edge < n_ ? edge : -1;
-        }
-        if (c.step < 0) {
-            const int edge = cell << shift;
-            return edge > 0 ? edge : -1;
-        }
-        return -1;
-    }
-
-    // When the walk leaves coarse cell `cell` (+inf through the map's border).
-    [[nodiscard]] double cell_exit(const OctantMap& m, const OctantCoordinate& c, int cell,
-                                   int shift) const {
-        const int edge = exit_edge(c, cell, shift);
-        return edge >= 0 ? crossing(m, c, edge) : kInf;
-    }
-
-    // The texel a walk enters when it leaves coarse cell `cell` through the edge cell_exit
-    // gave; −1 through the map's border (cell_exit is +inf there).
-    [[nodiscard]] int exit_texel(const OctantCoordinate& c, int cell, int shift) const {
-        const int edge = exit_edge(c, cell, shift);
-        return edge < 0 || c.step > 0 ? edge : edge - 1;
-    }
-
-    // The fine index after every edge crossed up to t_exit: the count of edges the ray crosses
-    // by then, as the fine walk's own comparisons count them, so that a skip lands exactly where
-    // the fine walk would be. Crossing times grow with the edge index along the walk's
-    // direction, so the search starts at the texel under p(t_exit) and settles with a few
-    // comparisons instead of testing every edge a long skip passes.
-    // `start`, when not −1, is a texel known to be crossed into by t_exit (exit_texel), from
-    // which the search only moves on.
-    [[nodiscard]] int advance(const OctantMap& m, const OctantCoordinate& c, int index,
-                              double t_exit, int start = -1) const {
-        if (c.step == 0) {
-            return index;
-        }
-        if (start >= 0) {
-            int guess = start;
-            if (c.step > 0) {
-                while (guess + 1 < n_ && crossing(m, c, guess + 1) <= t_exit) {
-                    ++guess;
-                }
-            } else {
-                while (guess > 0 && crossing(m, c, guess) <= t_exit) {
-                    --guess;
-                }
-            }
-            return guess;
-        }
-        const double den = m.den0 + t_exit * m.den1;
-        double p = den > 0.0 ? (c.num0 + t_exit * c.num1) / den : 0.0;
-        if (!std::isfinite(p)) {
-            p = 0.0;
-        }
-        const double g = (0.5 * std::clamp(p, -1.0, 1.0) + 0.5) * static_cast<double>(n_);
-        int guess = std::clamp(floor_of_coordinate(g), 0, n_ - 1);
-        // Far from every edge the texel under p(t_exit) is the answer: the rounding of p and of
-        // the crossing times is far below this margin, unless the L1 norm cancels (the ray
-        // passing next to the probe centre). Near an edge the crossing times decide, as the
-        // fine walk decides.
-        const double from_edge = std::abs(g - round_of_coordinate(g));
-        const bool no_cancellation = den * 1e6 > std::abs(m.den0) + std::abs(t_exit * m.den1);
-        if (from_edge > kEdgeMargin && no_cancellation &&
-            (c.step > 0 ? guess >= index : guess <= index) && g > 0.0 &&
-            g < static_cast<double>(n_)) {
-            return guess;
-        }
-        if (c.step > 0) {
-            guess = std::max(guess, index);
-            while (guess > index && !(crossing(m, c, guess) <= t_exit)) {
-                --guess;
-            }
-            while (guess + 1 < n_ && crossing(m, c, guess + 1) <= t_exit) {
-                ++guess;
-            }
-        } else {
-            guess = std::min(guess, index);
-            while (guess < index && !(crossing(m, c, guess + 1) <= t_exit)) {
-                ++guess;
-            }
-            while (guess > 0 && crossing(m, c, guess) <= t_exit) {
-                --guess;
-            }
-        }
-        return guess;
-    }
-
-    // The texel index of coordinate `c` at t_eval. Next to an edge the crossing time decides,
-    // as the walk itself would, instead of the rounding of p.
-    [[nodiscard]] int start_index(const OctantMap& m, const OctantCoordinate& c,
-                                  double t_eval) const {
-        const double den = m.den0 + t_eval * m.den1;
-        double p = den > 0.0 ? (c.num0 + t_eval * c.num1) / den : 0.0;
-        if (!std::isfinite(p)) {
-            p = 0.0;
-        }
-        p = std::clamp(p, -1.0, 1.0);
-        const double g = (0.5 * p + 0.5) * static_cast<double>(n_);
-        int index = std::clamp(floor_of_coordinate(g), 0, n_ - 1);
-        const double nearest_edge = round_of_coordinate(g);
-        const int edge = static_cast<int>(nearest_edge);
-        if (c.step != 0 && std::abs(g - nearest_edge) < 1e-3 && edge > 0 && edge < n_) {
-            const double t_edge = plane_crossing(m, c, edge);
-            if (std::isfinite(t_edge)) {
-                if (c.step > 0) {
-                    index = t_edge <= t_eval ? edge : edge - 1;
-                } else {
-                    index = t_edge <= t_eval ? edge - 1 : edge;
-                }
-            }
-        }
-        return index;
     }
 
     // The squared distance from the probe below which the ray passes clearly in front of every
@@ -730,6 +375,7 @@ private:
     int n_;
     glm::dvec3 o_;
     glm::dvec3 d_;
+    MapRay ray_;
     const TraceSettings& settings_;
     const std::vector<MinDistanceLevel>* levels_ = nullptr;
     int level_count_ = 0;
@@ -737,10 +383,6 @@ private:
     double perp2_ = 0.0;
     double origin_length_ = 0.0;
     double texel_scale_ = 0.0;
-    double two_over_n_ = 0.0;
-    double o_l1_ = 0.0; // |o|_1 and |d|_1: the size of the terms of the map's coordinates
-    double d_l1_ = 0.0;
-    double piece_start_ = 0.0;
     NearMiss near_miss_;
     ProbeTraceResult result_;
 };
