@@ -218,9 +218,12 @@ py::dict defaults_dict() {
     baking["lod_texels"] = as_written(bake.lod_texels);
     baking["splat_edge_margin"] = as_written(bake.splat_edge_margin);
     baking["supersample"] = MeshBakeSettings{}.supersample;
+    py::dict storage;
+    storage["distance_step"] = kDefaultDistanceStep;
     py::dict d;
     d["trace"] = trace;
     d["bake"] = baking;
+    d["storage"] = storage;
     return d;
 }
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 
+from ...core import defaults
 from ...core.cli.arguments import finite_float
 from ...core.grid_fit import FIT_MARGIN, FIT_SPACING
 from . import commands
@@ -15,7 +16,8 @@ def _add_storage_arguments(parser) -> None:
                              "(18 bytes a texel) or compact (7: 8-bit sRGB radiance, 16-bit distance, "
                              "8+8-bit normals, no confidence); default: the grid's Storage")
     parser.add_argument("--distance-step", type=finite_float, default=None, metavar="M",
-                        help="compact: the distance quantum in metres (default: the grid's, 0.001)")
+                        help="compact: the distance quantum in metres (default: the grid's; a new grid's is "
+                             f"{defaults.storage('distance_step'):g})")
 
 
 def build_parser() -> argparse.ArgumentParser:

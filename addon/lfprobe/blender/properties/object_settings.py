@@ -21,6 +21,8 @@ from bpy.props import (
     StringProperty,
 )
 
+from ...core import defaults
+
 COLOR_ATTRIBUTE = "Col"
 
 # Blender 4.5+ warns about "//" in path properties unless they say they support it.
@@ -94,7 +96,7 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
         description="Octahedral map size of each probe (texels per side)",
         min=8,
         soft_max=4096,
-        default=512,
+        default=defaults.bake("resolution"),
     )
     coarse_resolution: IntProperty(
         name="Coarse Resolution",
@@ -127,7 +129,7 @@ class LFProbeGridProperties(bpy.types.PropertyGroup):
         precision=4,
         step=1,
         unit="LENGTH",
-        default=0.001,
+        default=defaults.storage("distance_step"),
     )
     sources: CollectionProperty(type=LFProbeGridSource, name="Sources")
     active_source_index: IntProperty(name="Active Source", default=0)

@@ -6,6 +6,7 @@ from __future__ import annotations
 import bpy
 from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
 
+from ...core import defaults
 from .. import grid as grid_module
 
 
@@ -35,7 +36,7 @@ class LFProbeRenderSettings(bpy.types.PropertyGroup):
             ("nearest", "Nearest", "Try the probes nearest the ray first"),
             ("grid", "Grid Walk", "Walk the cells the ray crosses (3D DDA) and try their corner probes"),
         ),
-        default="auto",
+        default=defaults.trace("mode"),
         update=_redraw_viewports,
     )
     thickness: FloatProperty(
@@ -43,7 +44,7 @@ class LFProbeRenderSettings(bpy.types.PropertyGroup):
         description="How far behind the surface a probe saw a ray still counts as hitting it",
         min=0.0,
         soft_max=0.2,
-        default=0.02,
+        default=defaults.trace("thickness"),
         unit="LENGTH",
         precision=3,
         update=_redraw_viewports,
@@ -74,7 +75,7 @@ class LFProbeRenderSettings(bpy.types.PropertyGroup):
              "As bilinear, and where a pixel spans several texels, the probe's prefiltered radiance at the "
              "pixel's width: anti-aliases one ray per pixel, as texture LOD does"),
         ),
-        default="bilinear",
+        default=defaults.trace("filter"),
         update=_redraw_viewports,
     )
     blend: IntProperty(
@@ -83,6 +84,6 @@ class LFProbeRenderSettings(bpy.types.PropertyGroup):
                     "(1: the first probe that answers alone)",
         min=1,
         max=8,
-        default=4,
+        default=defaults.trace("blend"),
         update=_redraw_viewports,
     )

@@ -8,6 +8,8 @@ import argparse
 import math
 from typing import List, Optional
 
+from .. import defaults
+
 
 def finite_float(text: str) -> float:
     """argparse type of every number option: a float, but not nan or inf (which float() reads),
@@ -88,13 +90,14 @@ def plan_options(args, auto_resolution: bool = True) -> dict:
     }
 
 
-DISTANCE_STEP_HELP = ("compact storage: distance quantum in metres (default 0.001, half the ~2 mm "
-                      "range noise of a FARO-class scanner at 10 m)")
+def distance_step_help() -> str:
+    return (f"compact storage: distance quantum in metres (default {defaults.storage('distance_step'):g}, "
+            "half the ~2 mm range noise of a FARO-class scanner at 10 m)")
 
 
 def add_storage_arguments(parser, choices, default, text: str) -> None:
     parser.add_argument("--storage", choices=choices, default=default, help=text)
-    parser.add_argument("--distance-step", type=finite_float, default=0.0, metavar="M", help=DISTANCE_STEP_HELP)
+    parser.add_argument("--distance-step", type=finite_float, default=0.0, metavar="M", help=distance_step_help())
 
 
 def bake_storage(args):

@@ -8,7 +8,7 @@ import json
 from .. import native
 from ..probe_set import summarize
 from ..probe_storage import describe
-from .arguments import DISTANCE_STEP_HELP, finite_float
+from .arguments import distance_step_help, finite_float
 
 def _cmd_store(args) -> int:
     stored = native.load().set_probe_set_storage(args.folder, args.storage, distance_step=args.distance_step)
@@ -26,6 +26,6 @@ def add_parsers(sub) -> None:
     store = sub.add_parser("store", help="set how a baked probe set loads into memory")
     store.add_argument("folder", metavar="DIR")
     store.add_argument("storage", choices=["full", "compact"])
-    store.add_argument("--distance-step", type=finite_float, default=0.0, metavar="M", help=DISTANCE_STEP_HELP)
+    store.add_argument("--distance-step", type=finite_float, default=0.0, metavar="M", help=distance_step_help())
     store.add_argument("--json", action="store_true")
     store.set_defaults(run=_cmd_store)

@@ -43,6 +43,22 @@ def render_page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
         for sentence in data["findings"].get(key, []):
             page.paragraph(sentence, "finding")
 
+    _introduction_section(page, data)
+    _definitions_section(page, data)
+    _speed_section(page, data, img, findings)
+    _distance_section(page, data, img, findings)
+    _at_probe_section(page, data, img, findings)
+    _resolution_section(page, data, img, findings)
+    _images_section(page, data, img)
+    _peers_section(page, data, img, findings)
+    _planning_section(page, data, img)
+    _stability_section(page, data)
+    return page.render()
+
+
+def _introduction_section(page, data: Dict[str, object]) -> None:
+    """What was run, where and on what."""
+    scene = data["scene"]
     m = data["machine"]
     page.paragraph(
         f"Scene {scene['name']} ({scene['path']}), mesh {scene['mesh']} with {scene['triangles']:,} triangles, "
@@ -54,6 +70,9 @@ def render_page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
                    + f" from {len(scene['scanners'])} scanner(s). Probe grid {scene['grid']['counts']} from "
                    f"{scene['grid']['min']} to {scene['grid']['max']}.", "note")
 
+
+def _definitions_section(page, data: Dict[str, object]) -> None:
+    """The metrics' definitions and the ground truth's figures."""
     page.section("definitions", "Metrics")
     page.add(table([{"metric": k, "definition": v} for k, v in data["definitions"].items()],
                    [("metric", "metric", text), ("definition", "definition", text)]))
@@ -64,6 +83,9 @@ def render_page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
                                           ("spp", "spp", num(".0f")), ("seconds", "gt render s", num(".3f")),
                                           ("embree_primary_rays_per_second", "Embree primary M rays/s", num(".2f", 1e-6))]))
 
+
+def _speed_section(page, data: Dict[str, object], img, findings) -> None:
+    """Speed against error over the sweep's settings, and the probe trace against Embree."""
     page.section("speed", "Speed against error")
     page.paragraph("One point per setting: fine resolution, probe count, scan density and bake variant, and trace "
                    "settings (mode, surface thickness, coarse min-distance levels). Time is the native renderer's own "
@@ -95,6 +117,9 @@ def render_page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
         ("trace_over_embree_packets", "trace / packets", num(".3f")),
         ("trace_from_answer_over_embree", "from answer / Embree", num(".3f"))]))
 
+
+def _distance_section(page, data: Dict[str, object], img, findings) -> None:
+    """Error against the eye's distance from the nearest probe, and the walk."""
     page.section("distance", "Error against the eye's distance from the nearest probe")
     page.paragraph("Each view's eye is moved from the probe nearest to it toward the centre of the grid cell beside it "
                    "(the point farthest from every probe), keeping the viewing direction. Mesh-baked probes isolate "
@@ -118,6 +143,9 @@ def render_page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
         page.add(table(data["walk"], [("frame", "frame", text), ("distance_to_nearest_probe", "distance m", num(".3f")),
                                       ("ms_per_frame", "ms/frame", num(".2f")), *METRIC_COLUMNS]))
 
+
+def _at_probe_section(page, data: Dict[str, object], img, findings) -> None:
+    """Mesh-baked probes seen from their own centre."""
     page.section("at_probe", "Mesh-baked probes from their own centre")
     page.paragraph("A single probe baked from the mesh (an n×n bundle of Embree rays per texel, the colour averaged over "
                    "the rays on the centre ray's surface) at the grid probe nearest each view, seen from that probe's "
@@ -142,6 +170,9 @@ def render_page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
                                       ("hole_rate", "holes", num(".2%")), ("ms_per_frame", "ms/frame", num(".2f")),
                                       ("bake_seconds", "bake s", num(".2f"))]))
 
+
+def _resolution_section(page, data: Dict[str, object], img, findings) -> None:
+    """Error against fine resolution at each scan density."""
     page.section("resolution", "Error against fine resolution at several scan densities")
     page.paragraph("The paper found 3072² worse than 2048² for its point density: a point baked into one texel leaves "
                    "near surfaces as sieves at high resolution. 'points only' bakes that way (no footprint, no hole "
@@ -150,6 +181,10 @@ def render_page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
     img("resolution_flip.png", "FLIP against fine resolution N", 560)
     findings("resolution")
 
+
+def _images_section(page, data: Dict[str, object], img) -> None:
+    """Ground truth | probes | error, per view."""
+    scene = data["scene"]
     page.section("images", "Images: ground truth | probes | error")
     page.paragraph(f"Setting: {data['reference_setting']}. Left: ground truth; middle: probe render (magenta: "
                    "UNKNOWN); right: FLIP error per pixel (magma, black 0 … yellow 1).", "note")
@@ -158,6 +193,10 @@ def render_page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
         img(f"confusion_{view}.png", f"view '{view}': confusion of probe answers against ground truth")
         img(f"triplet_mesh_probes_{view}.png", f"view '{view}': ground truth | mesh-baked probes | FLIP error", None, True)
 
+
+def _peers_section(page, data: Dict[str, object], img, findings) -> None:
+    """Splats and the Poisson mesh from the same scans."""
+    scene = data["scene"]
     page.section("peers", "Peers: splats and a Poisson mesh")
     page.paragraph("From the densest scan: the raw cloud drawn as z-buffered splats (native, sized by local spacing), "
                    "and an Open3D screened Poisson mesh (normals estimated per scan, oriented toward its scanner; "
@@ -185,8 +224,9 @@ def render_page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
         img(f"triplet_splats_{view}.png", f"view '{view}': ground truth | splats | FLIP error", None, True)
         img(f"triplet_poisson_{view}.png", f"view '{view}': ground truth | Poisson mesh | FLIP error", None, True)
 
-    _planning_section(page, data, img)
 
+def _stability_section(page, data: Dict[str, object]) -> None:
+    """The hard cases and their verdicts."""
     page.section("stability", "Numerical stability")
     page.paragraph("The hard cases, run on this scene with probes baked from its mesh; each is judged by the "
                    "stated criterion.", "note")
@@ -207,7 +247,6 @@ def render_page(data: Dict[str, object], pngs: Dict[str, bytes]) -> str:
     page.paragraph("Raw figures: report.json, sweep.csv, sweep_views.csv, distance.csv, walk.csv, at_probe.csv, "
                    "peers.csv, stability.csv, ground_truth.csv, planning_resolution.csv, planning_walk.csv, planning_storage.csv, "
                    "planning_iterations.csv beside this file; images in images/.", "note")
-    return page.render()
 
 
 def _planning_section(page, data: Dict[str, object], img) -> None:
