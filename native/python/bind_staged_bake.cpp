@@ -86,7 +86,8 @@ void bind_staged_bake(py::module_& m) {
         py::arg("cloud"), py::arg("settings") = py::dict(),
         "Start making a cloud ready to bake from; settings as bake_probe_set's keywords "
         "(resolution, splat_scale, hole_fill_texels, max_splat_radius_texels, normal_neighbours, "
-        "lod_texels, splat_edge_margin, face_the_probe). The Job's result is a CloudBakeSource.");
+        "lod_texels, splat_edge_margin, splat_core_scale, face_the_probe). The Job's result is a "
+        "CloudBakeSource.");
 
     m.def(
         "cloud_bake_manifest",

@@ -50,8 +50,8 @@ inline Camera camera_from(const std::string& camera) {
 // The bake settings a binding takes by name in an options dict: BakeSettings' fields, each
 // under its own name (kBakeSettingNames lists them for messages). False for any other key.
 inline constexpr const char* kBakeSettingNames =
-    "resolution, splat_scale, splat_plane_reach, hole_fill_texels, max_splat_radius_texels, "
-    "lod_texels, splat_edge_margin, face_the_probe";
+    "resolution, splat_scale, splat_plane_reach, splat_core_scale, hole_fill_texels, "
+    "max_splat_radius_texels, lod_texels, splat_edge_margin, face_the_probe";
 inline bool set_bake_setting(BakeSettings& s, const std::string& key, pybind11::handle value) {
     if (key == "resolution") {
         s.resolution = value.cast<int>();
@@ -59,6 +59,8 @@ inline bool set_bake_setting(BakeSettings& s, const std::string& key, pybind11::
         s.splat_scale = value.cast<float>();
     } else if (key == "splat_plane_reach") {
         s.splat_plane_reach = value.cast<float>();
+    } else if (key == "splat_core_scale") {
+        s.splat_core_scale = value.cast<float>();
     } else if (key == "hole_fill_texels") {
         s.hole_fill_texels = value.cast<int>();
     } else if (key == "max_splat_radius_texels") {

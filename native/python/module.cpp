@@ -136,7 +136,7 @@ BakeRequest make_request(const std::string& folder, int resolution,
                          std::optional<std::vector<int>> counts, bool positions_in_world,
                          const std::string& sources_json, float splat_scale, int hole_fill_texels,
                          int max_splat_radius_texels, int normal_neighbours, float lod_texels,
-                         float splat_edge_margin) {
+                         float splat_edge_margin, float splat_core_scale) {
     BakeRequest r;
     r.folder = folder;
     r.resolution = resolution;
@@ -152,6 +152,7 @@ BakeRequest make_request(const std::string& folder, int resolution,
     r.settings.max_splat_radius_texels = max_splat_radius_texels;
     r.settings.lod_texels = lod_texels;
     r.settings.splat_edge_margin = splat_edge_margin;
+    r.settings.splat_core_scale = splat_core_scale;
     r.geometry.normal_neighbours = normal_neighbours;
     return r;
 }
@@ -217,6 +218,7 @@ py::dict defaults_dict() {
     baking["normal_neighbours"] = LocalGeometryOptions{}.normal_neighbours;
     baking["lod_texels"] = as_written(bake.lod_texels);
     baking["splat_edge_margin"] = as_written(bake.splat_edge_margin);
+    baking["splat_core_scale"] = as_written(bake.splat_core_scale);
     baking["supersample"] = MeshBakeSettings{}.supersample;
     py::dict storage;
     storage["distance_step"] = kDefaultDistanceStep;
@@ -458,13 +460,13 @@ PYBIND11_MODULE(_native, m) {
            std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
            bool positions_in_world, const std::string& sources_json, float splat_scale,
            int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours,
-           float lod_texels, float splat_edge_margin) {
-            return start_bake(std::move(cloud),
-                              make_request(folder, resolution, std::move(positions),
-                                           std::move(grid_min), std::move(grid_max),
-                                           std::move(counts), positions_in_world, sources_json,
-                                           splat_scale, hole_fill_texels, max_splat_radius_texels,
-                                           normal_neighbours, lod_texels, splat_edge_margin));
+           float lod_texels, float splat_edge_margin, float splat_core_scale) {
+            return start_bake(
+                std::move(cloud),
+                make_request(folder, resolution, std::move(positions), std::move(grid_min),
+                             std::move(grid_max), std::move(counts), positions_in_world,
+                             sources_json, splat_scale, hole_fill_texels, max_splat_radius_texels,
+                             normal_neighbours, lod_texels, splat_edge_margin, splat_core_scale));
         };
     const BakeSettings defaults;
     const LocalGeometryOptions geometry_defaults;
@@ -479,6 +481,7 @@ PYBIND11_MODULE(_native, m) {
           py::arg("normal_neighbours") = geometry_defaults.normal_neighbours,
           py::arg("lod_texels") = defaults.lod_texels,
           py::arg("splat_edge_margin") = defaults.splat_edge_margin,
+          py::arg("splat_core_scale") = defaults.splat_core_scale,
           "Start baking a probe set from a cloud into `folder`; positions or grid corners are "
           "world coordinates unless positions_in_world is False. lod_texels: how many texels "
           "apart the point hierarchy's cell surfels may be where they stand in for points (0: "
@@ -491,12 +494,13 @@ PYBIND11_MODULE(_native, m) {
             std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
             bool positions_in_world, const std::string& sources_json, float splat_scale,
             int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours,
-            float lod_texels, float splat_edge_margin, const py::object& progress) {
+            float lod_texels, float splat_edge_margin, float splat_core_scale,
+            const py::object& progress) {
             auto job = start_bake_fn(std::move(cloud), folder, resolution, std::move(positions),
                                      std::move(grid_min), std::move(grid_max), std::move(counts),
                                      positions_in_world, sources_json, splat_scale,
                                      hole_fill_texels, max_splat_radius_texels, normal_neighbours,
-                                     lod_texels, splat_edge_margin);
+                                     lod_texels, splat_edge_margin, splat_core_scale);
             return job->run(progress);
         },
         py::arg("cloud"), py::arg("folder"), py::arg("resolution") = defaults.resolution,
@@ -508,7 +512,8 @@ PYBIND11_MODULE(_native, m) {
         py::arg("max_splat_radius_texels") = defaults.max_splat_radius_texels,
         py::arg("normal_neighbours") = geometry_defaults.normal_neighbours,
         py::arg("lod_texels") = defaults.lod_texels,
-        py::arg("splat_edge_margin") = defaults.splat_edge_margin, py::arg("progress") = py::none(),
+        py::arg("splat_edge_margin") = defaults.splat_edge_margin,
+        py::arg("splat_core_scale") = defaults.splat_core_scale, py::arg("progress") = py::none(),
         "bake run to the end; see start_bake_probe_set.");
 
     lfprobe::python::bind_render(m);

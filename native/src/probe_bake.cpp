@@ -152,6 +152,9 @@ struct PlaneHit {
     // In the disc but past the surface's edge (Surfel::edge_reach): the point claims the texel
     // only where no surface is known there.
     bool beyond_edge = false;
+    // Outside the splat's core (BakeSettings::splat_core_scale): fills only where no core
+    // reaches.
+    bool fringe = false;
 };
 
 PlaneHit plane_hit(const Surfel& p, const glm::vec3& texel_dir) {
@@ -179,14 +182,6 @@ float surfel_depth(const Surfel& p, const PlaneHit& h) {
         return h.s;
     }
     return p.dist;
-}
-
-void keep_smaller(std::uint32_t& slot, std::uint32_t value) {
-    std::atomic_ref<std::uint32_t> ref(slot);
-    std::uint32_t current = ref.load(std::memory_order_relaxed);
-    while (value < current &&
-           !ref.compare_exchange_weak(current, value, std::memory_order_relaxed)) {
-    }
 }
 
 void keep_smaller(std::uint64_t& slot, std::uint64_t value) {
@@ -251,9 +246,15 @@ std::uint32_t ordered_bits(float non_negative) {
     return std::bit_cast<std::uint32_t>(non_negative);
 }
 
-// The sign bit of a texel's front depth (ordered_bits of a non-negative depth never sets it):
-// set where the front comes from splats past their surface's edge.
-constexpr std::uint32_t kBeyondEdge = 0x80000000u;
+// A texel's front: its depth's bits, below two flags that order the kinds of splat: a fringe's
+// (PlaneHit::fringe) only where no core reaches, and past a surface's edge only where nothing
+// else does.
+constexpr std::uint64_t kFringe = std::uint64_t{1} << 32;
+constexpr std::uint64_t kBeyondEdge = std::uint64_t{1} << 33;
+
+std::uint64_t front_key(const PlaneHit& hit, float depth) {
+    return (hit.beyond_edge ? kBeyondEdge : 0u) | (hit.fringe ? kFringe : 0u) | ordered_bits(depth);
+}
 
 // What a bake splats, visited j = 0 … count() - 1: id(j) names the visited point (a texel's
 // winner among equally central points is the smaller id), and the attributes are read by id.
@@ -393,6 +394,10 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
         p.splat_angle = std::atan2(settings.splat_scale * source.spacing(i), p.dist);
         const float alpha = p.splat_angle;
         const float cos_alpha = std::cos(alpha);
+        const float cos_core =
+            settings.splat_core_scale >= settings.splat_scale
+                ? -2.0f // every covered texel is core
+                : std::cos(std::atan2(settings.splat_core_scale * source.spacing(i), p.dist));
         // A point with no surface (too few neighbours for a normal) keeps the whole cone.
         const bool has_plane = glm::dot(p.normal, p.normal) > 0.0f;
         // A neighbour k texels away lies at least (k - 0.5) texel angles from `dir`.
@@ -413,6 +418,7 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
                     continue;
                 }
                 hit.beyond_edge = hit.beyond_edge && !own;
+                hit.fringe = !own && glm::dot(texel_dir, p.dir) < cos_core;
                 visit(t, p, hit);
             }
         }
@@ -436,14 +442,13 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
                           });
     };
 
-    // Pass 1: the nearest surface depth per texel; splats past their surface's edge only where
-    // no other reaches (the depth's sign bit orders them last).
-    // All bits set: no splat yet (above every depth, of either kind).
-    std::vector<std::uint32_t> front(texels, ~std::uint32_t{0});
+    // Pass 1: the nearest surface depth per texel among the splats of its first kind: cores,
+    // then fringes, then splats past their surface's edge (front_key).
+    // All bits set: no splat yet (above every depth, of any kind).
+    std::vector<std::uint64_t> front(texels, ~std::uint64_t{0});
     over_points("splatting points: depth", [&](std::size_t i) {
         for_each_splat_texel(i, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
-            keep_smaller(front[t],
-                         (hit.beyond_edge ? kBeyondEdge : 0u) | ordered_bits(surfel_depth(p, hit)));
+            keep_smaller(front[t], front_key(hit, surfel_depth(p, hit)));
         });
     });
     // Pass 2: the points on that front surface (within a surface thickness of about the point
@@ -461,10 +466,11 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
         const glm::vec3 rgb = source.colour(i);
         for_each_splat_texel(i, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
             const float depth = surfel_depth(p, hit);
-            if (hit.beyond_edge != ((front[t] & kBeyondEdge) != 0)) {
+            if (hit.beyond_edge != ((front[t] & kBeyondEdge) != 0) ||
+                hit.fringe != ((front[t] & kFringe) != 0)) {
                 return; // a splat past its edge where another surface is known, or the reverse
             }
-            const float nearest = std::bit_cast<float>(front[t] & ~kBeyondEdge);
+            const float nearest = std::bit_cast<float>(static_cast<std::uint32_t>(front[t]));
             if (depth > nearest + std::max(thickness, 1e-3f * nearest)) {
                 return;
             }

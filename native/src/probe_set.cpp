@@ -282,6 +282,7 @@ BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest
 json splat_settings_json(const BakeSettings& settings) {
     return json{{"splat_scale", settings.splat_scale},
                 {"splat_plane_reach", settings.splat_plane_reach},
+                {"splat_core_scale", settings.splat_core_scale},
                 {"max_splat_radius_texels", settings.max_splat_radius_texels},
                 {"hole_fill_texels", settings.hole_fill_texels},
                 {"min_distance", settings.min_distance},

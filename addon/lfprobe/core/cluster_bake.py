@@ -228,7 +228,8 @@ def bake_scans_on_cluster(
                     "hole_fill_texels": int(options.hole_fill_texels),
                     "normal_neighbours": int(options.normal_neighbours),
                     "lod_texels": float(options.lod_texels),
-                    "splat_edge_margin": float(options.splat_edge_margin)}
+                    "splat_edge_margin": float(options.splat_edge_margin),
+                    "splat_core_scale": float(options.splat_core_scale)}
         spec = CloudSpec(
             paths=tuple(os.path.abspath(str(p)) for p in scan_paths),
             scanners=tuple(tuple(map(float, s)) if s is not None else None for s in scanners),

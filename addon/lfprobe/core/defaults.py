@@ -2,7 +2,8 @@
 (``_native.DEFAULTS``): the command line, the report and the add-on take them from here instead
 of writing their own copies. ``trace(name)``: mode, thickness, use_coarse_levels, max_probes,
 filter, blend, spp, tile_size; ``bake(name)``: resolution, splat_scale, hole_fill_texels,
-max_splat_radius_texels, normal_neighbours, lod_texels, splat_edge_margin, supersample;
+max_splat_radius_texels, normal_neighbours, lod_texels, splat_edge_margin, splat_core_scale,
+supersample;
 ``storage(name)``: distance_step."""
 
 from __future__ import annotations

@@ -59,6 +59,9 @@ class BakeOptions:
     # Scan bakes: how far, in point spacings, a point at its surface's edge splats outward
     # (negative: full discs, which grow every silhouette by the splat radius).
     splat_edge_margin: float = field(default_factory=lambda: defaults.bake("splat_edge_margin"))
+    # Scan bakes: the splat's core in point spacings; the rest of its disc fills only texels no
+    # core reaches (at splat_scale or more: the whole disc is core).
+    splat_core_scale: float = field(default_factory=lambda: defaults.bake("splat_core_scale"))
     extra: dict = field(default_factory=dict)
     # None: every probe at `resolution`. A dict: plan first (bake --auto): per-probe resolution
     # from the data, classification, moves and drops, with these options of
@@ -137,7 +140,8 @@ def bake_from_cloud(
         plan = {"resolution": int(options.resolution), "splat_scale": float(options.splat_scale),
                 "hole_fill_texels": int(options.hole_fill_texels),
                 "lod_texels": float(options.lod_texels),
-                "splat_edge_margin": float(options.splat_edge_margin), **options.plan}
+                "splat_edge_margin": float(options.splat_edge_margin),
+                "splat_core_scale": float(options.splat_core_scale), **options.plan}
         job = _native.start_bake_planned_probe_set(cloud, out_dir, **where, options=plan)
         if start_only:
             return job
@@ -147,7 +151,8 @@ def bake_from_cloud(
                       hole_fill_texels=int(options.hole_fill_texels),
                       normal_neighbours=int(options.normal_neighbours),
                       lod_texels=float(options.lod_texels),
-                      splat_edge_margin=float(options.splat_edge_margin))
+                      splat_edge_margin=float(options.splat_edge_margin),
+                      splat_core_scale=float(options.splat_core_scale))
         if start_only:
             return _native.start_bake_probe_set(cloud, out_dir, **kwargs)
         summary = _native.bake_probe_set(cloud, out_dir, progress=progress, **kwargs)

@@ -44,6 +44,7 @@ def _cmd_bake(args) -> int:
         normal_neighbours=args.normal_k,
         lod_texels=args.lod_texels,
         splat_edge_margin=args.splat_edge_margin,
+        splat_core_scale=args.splat_core,
     )
     if args.auto:
         if args.mesh:
@@ -275,6 +276,11 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--splat-edge-margin", type=finite_float, default=defaults.bake("splat_edge_margin"),
                       metavar="S", help="how far (point spacings) a point at its surface's edge splats "
                                         "outward; negative: full discs (bakes before this option)")
+    bake.add_argument("--splat-core", type=finite_float, default=defaults.bake("splat_core_scale"),
+                      metavar="S", help="scans: a splat's core, in point spacings: a texel takes the nearest "
+                                        "splat whose core reaches it, and the rest of a splat only fills texels "
+                                        "no core reaches (default %(default)s; the --splat-scale or more: the whole "
+                                        "splat is core, as bakes before this option)")
     bake.add_argument("--lod-texels", type=finite_float, default=defaults.bake("lod_texels"), metavar="T",
                       help="scans: where the point hierarchy's cell surfels are at most T texels apart "
                            "as the probe sees them they stand in for the points, so a probe's cost "
