@@ -581,90 +581,87 @@ TEST(ProbeBake, ATexelsColourIsTheMeanOfTheFrontSurfacesPointsItCovers) {
     }
 }
 
-TEST(ProbeBake, SilhouettesDoNotGrowByTheSplatRadius) {
-    // A 40 cm plate sampled every 2 cm, 0.6 m in front of the probe, before a far wall. Its
-    // edge points' spacing is 2.6 cm (fewer close neighbours), and they splat half of it past
-    // themselves, to 0.213 m; a full splat disc reaches 0.8 spacings past them and paints the
-    // plate over the far wall there, along its whole silhouette (what made 1 % of the lab
-    // room's pixels show the wrong surface).
-    PointCloud cloud;
-    add_wall_x(cloud, 0.6f, 0.02f, 0.02f, 0.2f);
-    add_wall_x(cloud, 3.0f, 0.01f, 0.01f, 1.5f);
-    cloud.scans.push_back(
-        ScanSource{"plate and wall", cloud.positions.size(), glm::dvec3(0.0), true});
-    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+namespace {
 
-    // Of the rays that pass the plate's plane in the band 0.214–0.22 m off its centre line
-    // along +y (|z| < 0.15 m), the fraction whose texel holds the plate.
-    auto plate_beyond_its_edge = [&](float edge_margin, float core_scale) {
-        BakeSettings settings;
-        settings.resolution = 1024;
+// A 40 cm plate sampled every 2 cm, 0.6 m in front of a probe at the origin, before a wall 3 m
+// away sampled every 1 cm, and where its texels hold the plate.
+class PlateBeforeAWall {
+public:
+    PlateBeforeAWall() {
+        add_wall_x(cloud_, 0.6f, 0.02f, 0.02f, 0.2f);
+        add_wall_x(cloud_, 3.0f, 0.01f, 0.01f, 1.5f);
+        cloud_.scans.push_back(
+            ScanSource{"plate and wall", cloud_.positions.size(), glm::dvec3(0.0), true});
+        geometry_ = estimate_local_geometry(cloud_, {});
+    }
+
+    // Of the rays that pass the plate's plane between y0 and y1 off its centre line (|z| <
+    // 0.15 m), the fraction whose texel holds the plate, baked with `settings` (no hole fill).
+    [[nodiscard]] double plate_between(float y0, float y1, BakeSettings settings) const {
         settings.hole_fill_texels = 0;
-        settings.splat_edge_margin = edge_margin;
-        settings.splat_core_scale = core_scale;
-        const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+        const ProbeMap map = bake_probe_from_cloud(cloud_, geometry_, glm::dvec3(0.0), settings);
         std::size_t band = 0;
         std::size_t plate = 0;
         for_each_texel_on_wall_x(
             map, glm::vec3(0.0f), 0.6f,
-            [](const glm::vec3& p) {
-                return p.y >= 0.214f && p.y <= 0.22f && std::abs(p.z) <= 0.15f;
-            },
-            [&](std::size_t i, const glm::vec3&) {
-                ++band;
-                plate += map.distance[i] < 1.0f ? 1 : 0;
-            });
-        return static_cast<double>(plate) / static_cast<double>(std::max<std::size_t>(band, 1));
-    };
-    // The edge margin alone does it: the full discs' control also takes their whole disc as
-    // core (ASplatsFringeFillsOnlyWhereNoSurfacesCoreReaches tests the cores).
-    const BakeSettings defaults;
-    const double clipped = plate_beyond_its_edge(defaults.splat_edge_margin, defaults.splat_scale);
-    const double full_discs = plate_beyond_its_edge(-1.0f, defaults.splat_scale);
-    std::printf("plate seen 0.214-0.22 m off its centre (edge at 0.2 m): %.3f with edge splats, "
-                "%.3f with full "
-                "discs\n",
-                clipped, full_discs);
-    EXPECT_LT(clipped, 0.02);
-    EXPECT_GT(full_discs, 0.5);
-}
-
-TEST(ProbeBake, ASplatsFringeFillsOnlyWhereNoSurfacesCoreReaches) {
-    // The plate and wall of SilhouettesDoNotGrowByTheSplatRadius, with whole discs at the
-    // plate's edge (splat_edge_margin < 0), as a crease or a thin object's points splat when
-    // no neighbour tells them they are at an edge: the plate's edge points (spacing 2.6 cm)
-    // reach 0.8 spacings past themselves, to 0.222 m, but their cores only to 0.2193 m (seen
-    // obliquely). Past the core the wall's cores reach every texel (the cores cover a square
-    // pattern), so the plate must not show there, though it is nearer.
-    PointCloud cloud;
-    add_wall_x(cloud, 0.6f, 0.02f, 0.02f, 0.2f);
-    add_wall_x(cloud, 3.0f, 0.01f, 0.01f, 1.5f);
-    cloud.scans.push_back(
-        ScanSource{"plate and wall", cloud.positions.size(), glm::dvec3(0.0), true});
-    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
-    auto plate_past_its_core = [&](float core_scale) {
-        BakeSettings settings;
-        settings.resolution = 2048;
-        settings.hole_fill_texels = 0;
-        settings.splat_edge_margin = -1.0f;
-        settings.splat_core_scale = core_scale;
-        const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
-        std::size_t band = 0;
-        std::size_t plate = 0;
-        for_each_texel_on_wall_x(
-            map, glm::vec3(0.0f), 0.6f,
-            [](const glm::vec3& p) {
-                return p.y >= 0.2196f && p.y <= 0.2206f && std::abs(p.z) <= 0.15f;
-            },
+            [&](const glm::vec3& p) { return p.y >= y0 && p.y <= y1 && std::abs(p.z) <= 0.15f; },
             [&](std::size_t i, const glm::vec3&) {
                 ++band;
                 plate += map.distance[i] < 1.0f ? 1 : 0;
             });
         EXPECT_GT(band, 100u);
         return static_cast<double>(plate) / static_cast<double>(std::max<std::size_t>(band, 1));
+    }
+
+private:
+    PointCloud cloud_;
+    LocalGeometry geometry_;
+};
+
+} // namespace
+
+TEST(ProbeBake, SilhouettesDoNotGrowByTheSplatRadius) {
+    // The plate's edge points' spacing is 2.6 cm (fewer close neighbours), and they splat half
+    // of it past themselves, to 0.213 m; a full splat disc reaches 0.8 spacings past them and
+    // paints the plate over the far wall there, along its whole silhouette (what made 1 % of
+    // the lab room's pixels show the wrong surface). The edge margin alone does it: the full
+    // discs' control also takes their whole disc as core (the next test tests the cores).
+    const PlateBeforeAWall scene;
+    const BakeSettings defaults;
+    auto settings = [&](float edge_margin) {
+        BakeSettings s;
+        s.resolution = 1024;
+        s.splat_edge_margin = edge_margin;
+        s.splat_core_scale = defaults.splat_scale;
+        return s;
     };
-    const double cores_first = plate_past_its_core(BakeSettings{}.splat_core_scale);
-    const double nearest_wins = plate_past_its_core(BakeSettings{}.splat_scale);
+    const double clipped = scene.plate_between(0.214f, 0.22f, settings(defaults.splat_edge_margin));
+    const double full_discs = scene.plate_between(0.214f, 0.22f, settings(-1.0f));
+    std::printf("plate seen 0.214-0.22 m off its centre (edge at 0.2 m): %.3f with edge splats, "
+                "%.3f with full discs\n",
+                clipped, full_discs);
+    EXPECT_LT(clipped, 0.02);
+    EXPECT_GT(full_discs, 0.5);
+}
+
+TEST(ProbeBake, ASplatsFringeFillsOnlyWhereNoSurfacesCoreReaches) {
+    // The same plate with whole discs at its edge (splat_edge_margin < 0), as a crease or a
+    // thin object's points splat when no neighbour tells them they are at an edge: the edge
+    // points reach 0.8 spacings past themselves, to 0.222 m, but their cores only to 0.2193 m
+    // (seen obliquely). Past the core the wall's cores reach every texel (the cores cover a
+    // square pattern), so the plate must not show there, though it is nearer.
+    const PlateBeforeAWall scene;
+    auto settings = [](float core_scale) {
+        BakeSettings s;
+        s.resolution = 2048;
+        s.splat_edge_margin = -1.0f;
+        s.splat_core_scale = core_scale;
+        return s;
+    };
+    const double cores_first =
+        scene.plate_between(0.2196f, 0.2206f, settings(BakeSettings{}.splat_core_scale));
+    const double nearest_wins =
+        scene.plate_between(0.2196f, 0.2206f, settings(BakeSettings{}.splat_scale));
     std::printf("plate seen 0.2196-0.2206 m off its centre (cores to 0.2193 m, discs to 0.222 m): "
                 "%.3f with cores first, %.3f with the nearest splat winning\n",
                 cores_first, nearest_wins);
