@@ -86,6 +86,24 @@ public:
         }
     }
 
+    // Items of an element without properties: no bytes each in a binary file, an empty line
+    // each in an ASCII one, where the file must hold them. Skipped at once, never walked item
+    // by item: a header may declare 4e14 of them.
+    void skip_items_without_properties(std::uint64_t count) {
+        if (format_ != PlyFormat::Ascii) {
+            return;
+        }
+        for (std::uint64_t item = 0; item < count; ++item) {
+            if (pos_ >= file_.size()) {
+                throw input_error_at(where(), "expected " + std::to_string(count) +
+                                                  " empty lines of an element without "
+                                                  "properties, found " +
+                                                  std::to_string(item));
+            }
+            end_item(); // consumes a line or refuses what is not one
+        }
+    }
+
     [[nodiscard]] FileLocation where() const {
         return format_ == PlyFormat::Ascii ? FileLocation{file_.path(), line_, 0, true}
                                            : FileLocation{file_.path(), 0, pos_, false};
@@ -180,6 +198,10 @@ int find_property(const detail::PlyElement& e, std::initializer_list<const char*
         if (is_face && list_index < 0) {
             throw input_error_at(FileLocation{path, e.header_line, 0, true},
                                  "expected a face list property vertex_indices");
+        }
+        if (e.properties.empty()) {
+            reader.skip_items_without_properties(e.count);
+            continue;
         }
         const bool has_color = ir >= 0 && ig >= 0 && ib >= 0;
         const bool has_uv = iu >= 0 && iv >= 0;

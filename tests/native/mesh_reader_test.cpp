@@ -237,6 +237,36 @@ TEST(MeshReader, PlyIndicesAndListLengthsBeyondTheirTypesAreErrors) {
     EXPECT_THROW((void)read_scan_bytes("nan_list.ply", binary, ScanReadOptions{}), InputError);
 }
 
+// Found by the PLY harness (a 34 s timeout): an element of 422,222,222,222,222 items without
+// properties was walked item by item, reading nothing. Binary: skipped at once (its items take
+// no bytes); ASCII: each is a line, which the file must hold. The scan reader too.
+TEST(MeshReader, PlyElementsWithoutPropertiesAreNotWalkedItemByItem) {
+    const std::string vertices = "element vertex 3\nproperty float x\nproperty float y\n"
+                                 "property float z\nelement face 1\n"
+                                 "property list uchar int vertex_indices\n";
+    const std::string ascii = "ply\nformat ascii 1.0\nelement ex 422222222222222\n" + vertices +
+                              "end_header\n\n\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    // Its third "empty line" holds the first vertex: refused there, at once.
+    EXPECT_THROW((void)read_ply_mesh(temp_file("empty_items_ascii.ply", ascii)), InputError);
+    std::string binary = "ply\nformat binary_big_endian 1.0\nelement ex 422222222222222\n" +
+                         vertices + "end_header\n";
+    const unsigned char big_endian_triangle[] = {
+        0, 0, 0, 0,    0,    0, 0, 0, 0, 0, 0, 0, 0x3f, 0x80, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0, 0,
+        0, 0, 0, 0x3f, 0x80, 0, 0, 0, 0, 0, 0, 3, 0,    0,    0, 0, 0, 0, 0, 1, 0, 0, 0, 2};
+    binary.append(reinterpret_cast<const char*>(big_endian_triangle), sizeof big_endian_triangle);
+    const Mesh mesh = read_ply_mesh(temp_file("empty_items_binary.ply", binary));
+    EXPECT_EQ(mesh.vertices.size(), 3u);
+    EXPECT_EQ(mesh.triangles.size(), 1u);
+    // The harness's input itself: no vertex element after the empty one, refused as such.
+    const std::string found = "ply\nformat binary_big_endian 1.0\nelement ex 422222222222222\n\n"
+                              "end_header\n" +
+                              std::string("\0\0blu\0\xb4y_lit\0", 12);
+    EXPECT_THROW((void)read_ply_mesh_bytes("fuzz_input.ply", found), InputError);
+    EXPECT_THROW((void)read_scan_bytes("fuzz_input.ply", found, ScanReadOptions{}), InputError);
+    EXPECT_THROW((void)read_scan_bytes("empty_items_ascii.ply", ascii, ScanReadOptions{}),
+                 InputError);
+}
+
 TEST(MeshReader, NonFiniteVertexIsAnError) {
     EXPECT_THROW((void)read_obj(temp_file("nan.obj", "v nan 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")),
                  InputError);
