@@ -34,8 +34,9 @@ struct BakeSettings {
     // reached, and a near object's silhouette, a crease or a surface seen obliquely grew by the
     // fringe's width over what lies behind. A square sampling pattern needs 0.71 of its pitch
     // to be covered, 0.62 of the mean distance to six neighbours; 0.7 leaves a margin for scan
-    // lines that oblique incidence draws apart (at 0.625 a probe 1.5 cm from the hard scene's
-    // pillar saw the wall behind the pillar between them). Lab room, 16 samples a pixel, four
+    // lines that oblique incidence draws apart (at 0.625 the hard scene's probe 1.5 cm from
+    // the pillar saw what lies 0.6 m behind the pillar's face in 125 of the 2,496 texels
+    // looking at it, at 0.7 in 15, with whole discs in none). Lab room, 16 samples a pixel, four
     // views: +0.05 to +0.31 dB from 0.1° scans, +0.02 to +0.37 from 0.25°, +0.24 to +0.45 from
     // 1°, no more holes. At splat_scale or more: the whole disc is core, as before.
     float splat_core_scale = 0.7f;
