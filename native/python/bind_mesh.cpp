@@ -346,12 +346,15 @@ void bind_mesh(py::module_& m) {
     m.def(
         "start_simulate_scan",
         [](MeshArg mesh, const std::string& out_path, const std::vector<double>& position,
-           double step_deg, double noise_mm, double vertical_fov, std::uint64_t seed) {
+           double step_deg, double noise_mm, double vertical_fov, std::uint64_t seed,
+           double horizontal_fov, double horizontal_start) {
             ScannerSettings s;
             s.position = dvec3_from(position, "scanner position");
             s.step_deg = step_deg;
             s.noise_mm = noise_mm;
             s.vertical_fov_deg = vertical_fov;
+            s.horizontal_fov_deg = horizontal_fov;
+            s.horizontal_start_deg = horizontal_start;
             s.seed = seed;
             return std::make_unique<Job>(
                 std::function<ScanStats(Progress&)>([=](Progress& progress) {
@@ -369,8 +372,12 @@ void bind_mesh(py::module_& m) {
         },
         py::arg("mesh"), py::arg("out_path"), py::arg("position"), py::arg("step_deg") = 0.5,
         py::arg("noise_mm") = 2.0, py::arg("vertical_fov") = 300.0, py::arg("seed") = 1,
+        py::arg("horizontal_fov") = ScannerSettings{}.horizontal_fov_deg,
+        py::arg("horizontal_start") = ScannerSettings{}.horizontal_start_deg,
         "Start a simulated scan of `mesh` from `position` (world) into the .xyz `out_path`; the "
-        "Job's result is {rays, points, seconds}.");
+        "Job's result is {rays, points, seconds}. horizontal_fov < 360 sweeps only the azimuths "
+        "[horizontal_start, horizontal_start + horizontal_fov) degrees (from +X toward +Y), a "
+        "partial sweep.");
 }
 
 } // namespace lfprobe::python

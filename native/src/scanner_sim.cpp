@@ -45,6 +45,7 @@ struct Pattern {
     int elevations = 0; // rows below the zenith
     double step = 0.0;  // radians
     double elevation_min = 0.0;
+    double azimuth_start = 0.0; // radians
     [[nodiscard]] std::uint64_t rays() const {
         return static_cast<std::uint64_t>(azimuths) * static_cast<std::uint64_t>(elevations) + 1;
     }
@@ -58,13 +59,21 @@ Pattern pattern_of(const ScannerSettings& s) {
         throw InputError("scan: vertical_fov must be in (0, 360], got " +
                          std::to_string(s.vertical_fov_deg));
     }
+    if (!(s.horizontal_fov_deg > 0.0) || s.horizontal_fov_deg > 360.0) {
+        throw InputError("scan: horizontal_fov must be in (0, 360], got " +
+                         std::to_string(s.horizontal_fov_deg));
+    }
+    if (!std::isfinite(s.horizontal_start_deg)) {
+        throw InputError("scan: horizontal_start must be a finite angle in degrees");
+    }
     if (!(s.noise_mm >= 0.0)) {
         throw InputError("scan: noise_mm must be at least 0");
     }
     Pattern p;
     const double deg = std::numbers::pi / 180.0;
     p.step = s.step_deg * deg;
-    p.azimuths = std::max(1, static_cast<int>(std::lround(360.0 / s.step_deg)));
+    p.azimuths = std::max(1, static_cast<int>(std::lround(s.horizontal_fov_deg / s.step_deg)));
+    p.azimuth_start = std::fmod(s.horizontal_start_deg, 360.0) * deg;
     const double span = std::min(180.0, s.vertical_fov_deg / 2.0); // from the zenith down
     p.elevation_min = (90.0 - span) * deg;
     // Rows strictly below the zenith: j·step < span (the row at j·step = span is the zenith).
@@ -99,7 +108,7 @@ std::vector<SimulatedPoint> simulate_scan(const EmbreeScene& scene, const Scanne
             const int count = zenith ? 1 : p.azimuths;
             auto& out = per_row[static_cast<std::size_t>(j)];
             for (int k = 0; k < count; ++k) {
-                const double azimuth = k * p.step;
+                const double azimuth = p.azimuth_start + k * p.step;
                 Ray ray;
                 ray.origin = local_origin;
                 ray.direction = zenith ? glm::dvec3(0.0, 0.0, 1.0)
@@ -152,6 +161,12 @@ ScanStats write_simulated_scan(const EmbreeScene& scene, const ScannerSettings& 
                   settings.step_deg, settings.vertical_fov_deg, settings.noise_mm,
                   static_cast<unsigned long long>(settings.seed));
     text += line;
+    if (settings.horizontal_fov_deg < 360.0) {
+        std::snprintf(line, sizeof line,
+                      "# partial sweep: horizontal fov %g deg from azimuth %g deg\n",
+                      settings.horizontal_fov_deg, settings.horizontal_start_deg);
+        text += line;
+    }
     auto byte = [](float linear) {
         const float s = linear_to_srgb(std::clamp(linear, 0.0f, 1.0f));
         return static_cast<int>(std::lround(s * 255.0f));

@@ -2,6 +2,7 @@
 // file the scan reader takes back with its scanner position.
 #include <cmath>
 #include <filesystem>
+#include <limits>
 #include <numbers>
 
 #include <glm/geometric.hpp>
@@ -82,6 +83,46 @@ TEST(Scanner, PatternCountNoiseAndRoundTrip) {
     EXPECT_NEAR(glm::length(p0 - points[0].position), 0.0, 1e-5);
 }
 
+// A partial sweep: the scanner turns through 90° of azimuth from 30°, keeping the zenith; a
+// window may wrap past 0°.
+TEST(Scanner, PartialSweepKeepsItsAzimuthWindow) {
+    const Mesh mesh = closed_room();
+    const EmbreeScene scene(mesh);
+    ScannerSettings s;
+    s.position = {0.5, 0.5, 1.5};
+    s.step_deg = 2.0;
+    s.noise_mm = 0.0;
+    s.horizontal_fov_deg = 90.0;
+    s.horizontal_start_deg = 30.0;
+    ScanStats stats;
+    const std::vector<SimulatedPoint> points = simulate_scan(scene, s, nullptr, &stats);
+    EXPECT_EQ(stats.rays, 45u * 75u + 1u); // 45 azimuths × 75 rows + the zenith
+    EXPECT_EQ(points.size(), stats.rays);
+    const double deg = std::numbers::pi / 180.0;
+    std::size_t zenith = 0;
+    for (const SimulatedPoint& p : points) {
+        const glm::dvec3 d = p.position - s.position;
+        if (std::hypot(d.x, d.y) < 1e-9 * glm::length(d)) {
+            ++zenith;
+            continue;
+        }
+        const double azimuth = std::atan2(d.y, d.x);
+        EXPECT_GE(azimuth, 30.0 * deg - 1e-9);
+        EXPECT_LE(azimuth, 118.0 * deg + 1e-9); // the last of 45 steps of 2° from 30°
+    }
+    EXPECT_EQ(zenith, 1u);
+    // A window from 300° wraps past 0°: its azimuths lie in [300°, 360°) and [0°, 30°).
+    s.horizontal_start_deg = 300.0;
+    for (const SimulatedPoint& p : simulate_scan(scene, s)) {
+        const glm::dvec3 d = p.position - s.position;
+        if (std::hypot(d.x, d.y) < 1e-9 * glm::length(d)) {
+            continue;
+        }
+        const double azimuth = std::atan2(d.y, d.x); // (-180°, 180°]
+        EXPECT_TRUE(azimuth >= -60.0 * deg - 1e-9 && azimuth < 30.0 * deg) << azimuth / deg;
+    }
+}
+
 TEST(Scanner, RejectsBadSettings) {
     const Mesh mesh = closed_room();
     const EmbreeScene scene(mesh);
@@ -90,6 +131,14 @@ TEST(Scanner, RejectsBadSettings) {
     EXPECT_THROW((void)simulate_scan(scene, s), InputError);
     s.step_deg = 1.0;
     s.vertical_fov_deg = 400.0;
+    EXPECT_THROW((void)simulate_scan(scene, s), InputError);
+    s.vertical_fov_deg = 300.0;
+    for (const double fov : {0.0, -90.0, 361.0, std::nan("")}) {
+        s.horizontal_fov_deg = fov;
+        EXPECT_THROW((void)simulate_scan(scene, s), InputError) << fov;
+    }
+    s.horizontal_fov_deg = 90.0;
+    s.horizontal_start_deg = std::numeric_limits<double>::infinity();
     EXPECT_THROW((void)simulate_scan(scene, s), InputError);
 }
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 import os
 
+import numpy as np
 import pytest
 
 from conftest import SHARED_DATA
@@ -64,6 +65,30 @@ def test_scan_and_bake(tmp_path):
     assert manifest["sources"][0]["kind"] == "mesh"
     # Inside the closed box every texel sees a surface except through the open front.
     assert summary["mean_coverage"]["unknown"] == 0.0
+
+
+def test_scan_partial_sweep(tmp_path):
+    """--horizontal-fov/--horizontal-start: a partial sweep keeps its window of azimuth, says so
+    in the file's header, and a bad window is refused with exit 2."""
+    _native = native.load()
+    full, part = str(tmp_path / "full.xyz"), str(tmp_path / "part.xyz")
+    common = ["scan", "--mesh", CORNELL, "--at", "0", "1", "0", "--step-deg", "4", "--quiet"]
+    assert cli.main(common + ["--out", full]) == 0
+    assert cli.main(common + ["--out", part, "--horizontal-fov", "90",
+                              "--horizontal-start", "-45"]) == 0
+    with open(part) as f:
+        header = [f.readline() for _ in range(3)]
+    assert header[2].startswith("# partial sweep: horizontal fov 90 deg from azimuth -45 deg")
+    xyz = _native.load_scans([part], cache_dir="")
+    positions = xyz.positions.astype(float) + xyz.world_offset
+    d = positions - [0.0, 1.0, 0.0]
+    azimuth = np.degrees(np.arctan2(d[:, 1], d[:, 0]))
+    side = np.hypot(d[:, 0], d[:, 1]) > 1e-6 * np.linalg.norm(d, axis=1)
+    # Positions are written to the micrometre: their azimuths are exact to about 1e-4°.
+    assert ((azimuth[side] >= -45.0 - 1e-3) & (azimuth[side] < 45.0)).all()
+    assert 0.2 < len(xyz) / len(_native.load_scans([full], cache_dir="")) < 0.3
+    assert cli.main(common + ["--out", str(tmp_path / "bad.xyz"), "--horizontal-fov", "0"]) == 2
+    assert not (tmp_path / "bad.xyz").exists()
 
 
 def _georef_quad_obj(path, origin):

@@ -161,6 +161,58 @@ def real_scan_row(_native, tmp: str) -> dict:
     return row
 
 
+# The demo's lab room, scanned from its first station at 0.5°: once over the whole circle and
+# once over a 90° window of azimuth (a partial sweep), each baked into the scene's probe grid
+# at 512² and traced from the scene's view between probes.
+LAB_SCENE = os.path.join(os.path.dirname(__file__), "..", "..", "..", "blend", "lab_room",
+                         "lab_room.scene.json")
+PARTIAL_SWEEP = {"step_deg": 0.5, "horizontal_start": 45.0, "horizontal_fov": 90.0,
+                 "res": (320, 200), "probe_res": 512}
+
+
+def partial_sweep_rows(_native, tmp: str) -> list:
+    """One station of the lab room, a complete and a partial sweep through the same probe grid
+    and view: rays per second on 1 and 2 threads, texels and probes per ray, UNKNOWN rays."""
+    with open(LAB_SCENE, encoding="utf-8") as f:
+        scene = json.load(f)
+    mesh = os.path.join(os.path.dirname(LAB_SCENE), scene["mesh"])
+    station = [float(v) for v in scene["scanners"][0]]
+    view = next(v for v in scene["views"] if v["name"] == "between_probes")
+    text = json.dumps(camera_dict(view["position"], view["look_at"], PARTIAL_SWEEP["res"],
+                                  lens=view["lens"]))
+    rows = []
+    for label, fov in (("complete sweep", 360.0), ("90° window", PARTIAL_SWEEP["horizontal_fov"])):
+        xyz = os.path.join(tmp, f"lab_station_{int(fov)}.xyz")
+        scanned = _native.start_simulate_scan(
+            mesh, xyz, station, step_deg=PARTIAL_SWEEP["step_deg"],
+            noise_mm=scene["scan"]["noise_mm"], vertical_fov=scene["scan"]["vertical_fov"],
+            horizontal_fov=fov, horizontal_start=PARTIAL_SWEEP["horizontal_start"]).run()
+        cloud = _native.load_scans([xyz], cache_dir="")
+        folder = os.path.join(tmp, f"lab_probes_{int(fov)}")
+        start = time.perf_counter()
+        _native.bake_probe_set(cloud, folder, resolution=PARTIAL_SWEEP["probe_res"],
+                               grid_min=scene["grid"]["min"], grid_max=scene["grid"]["max"],
+                               counts=scene["grid"]["counts"])
+        bake_seconds = time.perf_counter() - start
+        del cloud
+        field = _native.ProbeField.load(folder)
+        row = {"view": f"lab room, one station, {label}", "horizontal_fov": fov,
+               "points": scanned["points"], "bake_seconds": bake_seconds,
+               "unknown_texels": _unknown_texels(folder)}
+        for threads in (1, 2):
+            stats = _best_render(field, text, threads)
+            row[f"rays_per_second_{threads}_threads"] = stats["rays_per_second"]
+            row["texels_per_ray"] = stats["mean_steps"]
+            row["probes_per_ray"] = stats["mean_probes"]
+            row["unknown_rays"] = stats["unknown"] / stats["rays"]
+        del field
+        shutil.rmtree(folder, ignore_errors=True)
+        rows.append(row)
+    rows[1]["complete_over_partial"] = (rows[0]["rays_per_second_2_threads"]
+                                        / rows[1]["rays_per_second_2_threads"])
+    return rows
+
+
 def main(args) -> int:
     _native = native.load()
     tmp = tempfile.mkdtemp(prefix="lfprobe-bench-render-")
@@ -234,6 +286,21 @@ def main(args) -> int:
                 pump["complete_over_partial"] = ratio
                 print(f"  the complete scan's 'between probes' view ({complete['points']:,} points) "
                       f"traces {ratio:.1f}× as many rays per second (the aim: within 2×)")
+        if os.path.isfile(LAB_SCENE):
+            res = PARTIAL_SWEEP["res"]
+            print(f"== the lab room from one station at {PARTIAL_SWEEP['step_deg']}°, the whole "
+                  f"circle and a {PARTIAL_SWEEP['horizontal_fov']:.0f}° window of azimuth, the "
+                  f"scene's grid at {PARTIAL_SWEEP['probe_res']}², its view between probes at "
+                  f"{res[0]}×{res[1]} ==")
+            results["partial_sweep"] = partial_sweep_rows(_native, tmp)
+            for row in results["partial_sweep"]:
+                print(f"  {row['view']}: {row['points']:,} points, {100 * row['unknown_texels']:.1f}% "
+                      f"of texels unknown; {row['rays_per_second_1_threads'] / 1e6:.3f} / "
+                      f"{row['rays_per_second_2_threads'] / 1e6:.3f} M rays/s on 1 / 2 threads, "
+                      f"{row['texels_per_ray']:.0f} texels and {row['probes_per_ray']:.1f} probes per "
+                      f"ray, {100 * row['unknown_rays']:.0f}% of rays UNKNOWN")
+            print(f"  the complete sweep traces {results['partial_sweep'][1]['complete_over_partial']:.1f}× "
+                  f"as many rays per second as the partial one (the aim: within 2×)")
         print("summary: points, unknown texels, probe trace ms/frame, splat ms/frame")
         for row in results["sizes"]:
             print(f"  {row['points']:>12,}  {100 * row['unknown_texels']:6.2f}%  "

@@ -6,7 +6,9 @@
 // so every direction above 90° − fov/2 is seen once. lfprobe samples the same set of
 // directions as azimuth φ = k·step in [0°, 360°) and elevation θ = 90° − fov/2 + j·step up to
 // 90° (default fov 300°: θ from −60° to +90°); the zenith (θ = 90°) is one ray, not one per
-// azimuth. Direction = (cos θ cos φ, cos θ sin φ, sin θ), world Z up.
+// azimuth. Direction = (cos θ cos φ, cos θ sin φ, sin θ), world Z up. A partial sweep (a
+// scanner told to turn through part of the circle, as users do to save time) takes the
+// azimuths φ = start + k·step in [start, start + horizontal fov) instead; it keeps the zenith.
 #pragma once
 
 #include <cstdint>
@@ -22,7 +24,9 @@ namespace lfprobe {
 struct ScannerSettings {
     glm::dvec3 position{0.0}; // world coordinates
     double step_deg = 0.5;
-    double vertical_fov_deg = 300.0; // (0, 360]
+    double vertical_fov_deg = 300.0;   // (0, 360]
+    double horizontal_fov_deg = 360.0; // (0, 360]: the azimuths swept
+    double horizontal_start_deg = 0.0; // the first azimuth (from +X toward +Y)
     // Range noise: normal, σ = noise_mm at 10 m, scaled linearly with the range.
     double noise_mm = 2.0;
     std::uint64_t seed = 1;

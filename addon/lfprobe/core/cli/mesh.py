@@ -38,7 +38,8 @@ def _cmd_scan(args) -> int:
         args,
         lambda _native: _native.start_simulate_scan(
             args.mesh, args.out, list(args.at), step_deg=args.step_deg, noise_mm=args.noise_mm,
-            vertical_fov=args.vertical_fov, seed=args.seed),
+            vertical_fov=args.vertical_fov, seed=args.seed, horizontal_fov=args.horizontal_fov,
+            horizontal_start=args.horizontal_start),
         lambda stats: (f"scan {args.out}: {stats['points']} points from {stats['rays']} rays "
                        f"in {stats['seconds']:.3f} s"),
     )
@@ -64,6 +65,10 @@ def add_parsers(subparsers) -> None:
     scan.add_argument("--noise-mm", type=finite_float, default=2.0, help="range noise σ at 10 m (mm)")
     scan.add_argument("--vertical-fov", type=finite_float, default=300.0,
                       help="vertical field of view (degrees; 300: elevation −60° to +90°)")
+    scan.add_argument("--horizontal-fov", type=finite_float, default=360.0,
+                      help="azimuths swept (degrees; less than 360: a partial sweep)")
+    scan.add_argument("--horizontal-start", type=finite_float, default=0.0,
+                      help="first azimuth of the sweep (degrees, from +X toward +Y)")
     scan.add_argument("--seed", type=int, default=1, help="noise seed")
     scan.add_argument("--out", required=True, help="output .xyz file")
     scan.add_argument("--json", action="store_true", help="print the stats as JSON")
