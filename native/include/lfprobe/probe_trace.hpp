@@ -38,8 +38,14 @@ enum class TraceStatus : std::uint8_t {
 
 struct TraceSettings {
     // A ray within this distance (metres) in front of or behind a stored surface still meets
-    // it: the stored distance is a per-texel sample of a continuous surface.
-    double thickness = 0.02;
+    // it: the stored distance is a per-texel sample of a continuous surface. 1 cm is ten times
+    // a scanner's range noise; 2 cm (the default before) let rays that pass behind a near
+    // object's silhouette within 2 cm meet it instead of what lies behind. Lab room, four
+    // stations, 16 samples a pixel, views 0.8 and 0.4 m from the nearest probe: +0.13 and
+    // +0.17 dB from 0.1° scans (wrong-surface pixels 1.04 -> 0.94 %, 0.89 -> 0.82 %), +0.35
+    // and +0.17 from 0.25°, +0.26 and +0.18 from 1°; a view outside the grid -0.19 to -0.26 dB,
+    // its rays more often honestly UNKNOWN (its answered pixels +0.2 dB).
+    double thickness = 0.01;
     // Plus this many texel footprints at the surface's distance (footprint = distance × the
     // texel's angular size, sqrt(4π)/N): grazing surfaces change distance across a texel.
     double thickness_texels = 1.0;

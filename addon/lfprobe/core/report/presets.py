@@ -20,7 +20,7 @@ TRACE_VARIANTS = [
     # Coarse resolution: the coarsest min-distance level kept (ProbeField.load(coarse_resolution)).
     ("coarse levels down to 32²", {**DEFAULT_TRACE[1], "coarse_resolution": 32}),
     ("nearest-first (no grid walk)", {**DEFAULT_TRACE[1], "mode": "nearest"}),
-    ("thickness 1 cm", {**DEFAULT_TRACE[1], "thickness": 0.01}),
+    ("thickness 2 cm (the default before)", {**DEFAULT_TRACE[1], "thickness": 0.02}),
     ("thickness 5 cm", {**DEFAULT_TRACE[1], "thickness": 0.05}),
     # The paper's colour: the first probe that answers, its one texel (no filter, no blending).
     ("first hit, nearest texel (the paper)", {**DEFAULT_TRACE[1], "filter": "nearest", "blend": 1}),
