@@ -322,7 +322,9 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--mode", choices=["auto", "nearest", "grid"], default="auto",
                         help="auto: grid walk for grid sets, else nearest probes first")
     render.add_argument("--threads", type=int, default=0, help="cores to use (0: all); same image")
-    render.add_argument("--thickness", type=finite_float, default=defaults.trace("thickness"), help="surface thickness (m)")
+    render.add_argument("--thickness", type=finite_float, default=defaults.trace("thickness"),
+                        help="surface thickness (m; a texel footprint at the surface's distance is added; "
+                             f"default {defaults.trace('thickness'):g})")
     add_fidelity_arguments(render)
     render.add_argument("--json", action="store_true", help="print the stats as JSON")
     render.add_argument("--quiet", action="store_true")
