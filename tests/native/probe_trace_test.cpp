@@ -428,6 +428,27 @@ TEST(Trace, BackFacesAndRaysFromBehindASurfaceAreUnknown) {
     EXPECT_EQ(trace_probe(flipped, &levels, inside).status, TraceStatus::Unknown);
 }
 
+TEST(Trace, ARayTwoCentimetresBehindASurfaceDoesNotMeetIt) {
+    // A ray that runs 2 cm behind what the probe saw, as one passing just behind a near
+    // object's silhouette does, is not on that surface: it must go on (UNKNOWN, the next probe
+    // asked), not meet it and show the object where what lies behind belongs. At 1024² the
+    // default tolerance is 1 cm plus a texel footprint (7 mm at the wall's 2 m); the 2 cm of
+    // the earlier default met it (the wrong-surface pixels along the lab room's silhouettes).
+    const BoxRoomScene scene = scenes::empty_box_room();
+    const glm::dvec3 centre(0.0, 0.0, 1.0);
+    const int n = 1024;
+    const ProbeMap map = scenes::analytic_probe(scene, centre, n);
+    const MinDistancePyramid levels(map.distance, n);
+    const Ray behind = probe_ray({2.02, 0.1, 0.1}, {0.0, 1.0, 0.05}, 0.0, 0.3);
+    EXPECT_EQ(trace_probe(map, &levels, behind).status, TraceStatus::Unknown);
+    TraceSettings two_centimetres;
+    two_centimetres.thickness = 0.02;
+    EXPECT_EQ(trace_probe(map, &levels, behind, two_centimetres).status, TraceStatus::Hit);
+    // The same ray 5 mm behind the wall is on it.
+    const Ray on = probe_ray({2.005, 0.1, 0.1}, {0.0, 1.0, 0.05}, 0.0, 0.3);
+    EXPECT_EQ(trace_probe(map, &levels, on).status, TraceStatus::Hit);
+}
+
 TEST(Trace, StartsAtTMinAndStopsAtTMax) {
     const BoxRoomScene scene;
     const glm::dvec3 centre(0.3, -0.2, 1.2);
