@@ -61,10 +61,12 @@ struct Fidelity {
 };
 
 RenderSettings render_settings(const std::string& mode, double thickness, bool use_coarse_levels,
-                               int tile_size, const Fidelity& fidelity = {}) {
+                               int tile_size, const Fidelity& fidelity = {},
+                               double fallback_thickness = TraceSettings{}.fallback_thickness) {
     RenderSettings settings;
     settings.trace.mode = field_mode_from_name(mode);
     settings.trace.probe.thickness = thickness;
+    settings.trace.probe.fallback_thickness = fallback_thickness;
     settings.trace.probe.use_coarse_levels = use_coarse_levels;
     settings.tile_size = tile_size;
     settings.samples_per_pixel = fidelity.spp;
@@ -170,10 +172,12 @@ void bind_render(py::module_& m) {
             "start_render",
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
                const std::string& mode, int threads, double thickness, bool use_coarse_levels,
-               int tile_size, int spp, const std::string& filter, int blend) {
+               int tile_size, int spp, const std::string& filter, int blend,
+               double fallback_thickness) {
                 const Camera cam = camera_from(camera);
-                const RenderSettings settings = render_settings(mode, thickness, use_coarse_levels,
-                                                                tile_size, {spp, filter, blend});
+                const RenderSettings settings =
+                    render_settings(mode, thickness, use_coarse_levels, tile_size,
+                                    {spp, filter, blend}, fallback_thickness);
                 using Result = std::pair<RenderedImage, RenderStats>;
                 return std::make_unique<Job>(
                     std::function<Result(Progress&)>([=](Progress& progress) {
@@ -193,6 +197,7 @@ void bind_render(py::module_& m) {
             py::arg("thickness") = TraceSettings{}.thickness, py::arg("use_coarse_levels") = true,
             py::arg("tile_size") = RenderSettings{}.tile_size, py::arg("spp") = Fidelity{}.spp,
             py::arg("filter") = Fidelity{}.filter, py::arg("blend") = Fidelity{}.blend,
+            py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
             "Start tracing a view in the background (the Blender engine's F12): a Job with "
             "progress in pixels, cancel(), and result() = (image dict, stats dict) as render() "
             "returns.")
@@ -201,10 +206,11 @@ void bind_render(py::module_& m) {
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
                const std::string& output, const std::string& mode, int threads, double thickness,
                bool use_coarse_levels, int tile_size, int spp, const std::string& filter,
-               int blend) {
+               int blend, double fallback_thickness) {
                 const Camera cam = camera_from(camera);
-                const RenderSettings settings = render_settings(mode, thickness, use_coarse_levels,
-                                                                tile_size, {spp, filter, blend});
+                const RenderSettings settings =
+                    render_settings(mode, thickness, use_coarse_levels, tile_size,
+                                    {spp, filter, blend}, fallback_thickness);
                 RenderStats stats;
                 RenderedImage image;
                 {
@@ -221,6 +227,7 @@ void bind_render(py::module_& m) {
             py::arg("use_coarse_levels") = true, py::arg("tile_size") = RenderSettings{}.tile_size,
             py::arg("spp") = Fidelity{}.spp, py::arg("filter") = Fidelity{}.filter,
             py::arg("blend") = Fidelity{}.blend,
+            py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
             "Trace a view (camera: a JSON path or text); returns (image dict, stats dict) and "
             "writes the EXR when output is given. threads=0 uses every core. spp: samples per "
             "pixel (1 or a square; colour and coverage averaged, the rest from the pixel "
@@ -233,10 +240,10 @@ void bind_render(py::module_& m) {
         [](const std::string& folder, const std::string& camera, const std::string& output,
            const std::string& mode, int threads, double thickness, bool use_coarse_levels,
            const py::object& storage, double distance_step, int spp, const std::string& filter,
-           int blend) {
+           int blend, double fallback_thickness) {
             const Camera cam = camera_from(camera);
-            const RenderSettings settings =
-                render_settings(mode, thickness, use_coarse_levels, 32, {spp, filter, blend});
+            const RenderSettings settings = render_settings(
+                mode, thickness, use_coarse_levels, 32, {spp, filter, blend}, fallback_thickness);
             const std::optional<ProbeStorage> chosen = storage_from(storage, distance_step);
             return std::make_unique<Job>(
                 std::function<RenderStats(Progress&)>([=](Progress& progress) {
@@ -253,6 +260,7 @@ void bind_render(py::module_& m) {
         py::arg("use_coarse_levels") = true, py::arg("storage") = py::none(),
         py::arg("distance_step") = 0.0, py::arg("spp") = Fidelity{}.spp,
         py::arg("filter") = Fidelity{}.filter, py::arg("blend") = Fidelity{}.blend,
+        py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
         "Start rendering the probe set in `folder` from `camera` (JSON path or text) into the EXR "
         "`output`; the Job's result is the stats dict. storage as for ProbeField.load.");
 

@@ -204,6 +204,7 @@ py::dict defaults_dict() {
     py::dict trace;
     trace["mode"] = field_mode_name(render.trace.mode);
     trace["thickness"] = render.trace.probe.thickness;
+    trace["fallback_thickness"] = render.trace.probe.fallback_thickness;
     trace["use_coarse_levels"] = render.trace.probe.use_coarse_levels;
     trace["max_probes"] = render.trace.max_probes;
     trace["filter"] = radiance_filter_name(render.trace.filter);

@@ -76,6 +76,7 @@ struct FieldQuery {
         ++result.probes_tried;
         if (r.status == TraceStatus::Unknown) {
             result.free_until = std::max(result.free_until, r.free_until);
+            keep_fallback(index, r);
             return false;
         }
         result.status = r.status;
@@ -87,6 +88,38 @@ struct FieldQuery {
         result.texel = r.texel;
         return true;
     }
+
+    // A probe's fallback meeting (ProbeTraceResult::has_fallback): the nearest along the ray
+    // is kept, unless a probe has proven the ray free past it.
+    void keep_fallback(std::size_t index, const ProbeTraceResult& r) {
+        if (!r.has_fallback) {
+            return;
+        }
+        if (fallback.has_fallback && fallback.t_fallback <= r.t_fallback) {
+            return;
+        }
+        fallback = r;
+        fallback_probe = index;
+    }
+
+    // No probe answered: a HIT on the kept fallback when no probe proved the ray free past
+    // it, else UNKNOWN.
+    void finish_unanswered() {
+        result.status = TraceStatus::Unknown;
+        if (!fallback.has_fallback) {
+            return;
+        }
+        result.status = TraceStatus::Hit;
+        result.t = fallback.t_fallback;
+        result.free_until = fallback.t_fallback;
+        result.radiance = fallback.radiance;
+        result.normal = fallback.normal;
+        result.probe = static_cast<int>(fallback_probe);
+        result.texel = fallback.fallback_texel;
+    }
+
+    ProbeTraceResult fallback;
+    std::size_t fallback_probe = 0;
 };
 
 // Candidate probes ordered by squared distance to `point`, ties by index (deterministic).
@@ -361,7 +394,7 @@ FieldTraceResult ProbeField::trace(const Ray& ray, const FieldTraceSettings& set
 
 FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
                                            const FieldTraceSettings& settings) const {
-    FieldQuery query{*this, ray, settings.probe, {}};
+    FieldQuery query{*this, ray, settings.probe, {}, {}, 0};
     query.result.free_until = ray.t_min;
     const std::size_t wanted =
         std::min(probe_count(), static_cast<std::size_t>(std::max(settings.max_probes, 1)));
@@ -386,7 +419,7 @@ FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
     if (ask_in_passes(query, tried, best.data(), kept)) {
         return query.result;
     }
-    query.result.status = TraceStatus::Unknown;
+    query.finish_unanswered();
     return query.result;
 }
 
@@ -395,7 +428,7 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
     if (!walk.meets_grid()) {
         return trace_nearest(ray, settings); // the ray never meets the grid's box
     }
-    FieldQuery query{*this, ray, settings.probe, {}};
+    FieldQuery query{*this, ray, settings.probe, {}, {}, 0};
     query.result.free_until = ray.t_min;
     TriedProbes tried;
     while (const std::optional<GridCellSpan> span = walk.next()) {
@@ -415,7 +448,7 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
             }
         }
     }
-    query.result.status = TraceStatus::Unknown;
+    query.finish_unanswered();
     return query.result;
 }
 

@@ -62,7 +62,7 @@ public:
         const double far = max_distance(t0, t1);
         if (far <= settings_.eye_at_probe_distance) {
             // Within this ball around the probe centre nothing can be: the probe stood there.
-            near_miss_.valid = false;
+            forget_near_misses();
             return false;
         }
         const double r = static_cast<double>(map_.distance_at(i));
@@ -70,17 +70,16 @@ public:
             return stop_unknown({x, y}, t0);
         }
         if (std::isinf(r)) {
-            near_miss_.valid = false;
+            forget_near_misses();
             return false;
         }
         const double thick = thickness(r);
+        const double wide = fallback_thickness(r);
         if (far < r) {
-            if (far >= r - thick) {
-                const double t_far = distance2(t0) >= distance2(t1) ? t0 : t1;
-                near_miss_ = NearMiss{true, {x, y}, i, t_far, t0};
-            } else {
-                near_miss_.valid = false;
-            }
+            const double t_far = distance2(t0) >= distance2(t1) ? t0 : t1;
+            const NearMiss passed{true, {x, y}, i, t_far, t0};
+            near_miss_ = far >= r - thick ? passed : NearMiss{};
+            wide_miss_ = far >= r - wide ? passed : NearMiss{};
             return false;
         }
         const double near = min_distance(t0, t1);
@@ -89,7 +88,13 @@ public:
             if (near_miss_.valid) {
                 return meet(near_miss_.texel, near_miss_.index, near_miss_.t, near_miss_.t_enter);
             }
-            return stop_unknown({x, y}, t0);
+            stop_unknown({x, y}, t0);
+            if (wide_miss_.valid) {
+                keep_fallback(wide_miss_.texel, wide_miss_.index, wide_miss_.t);
+            } else if (near <= r + wide) {
+                keep_fallback({x, y}, i, solve_hit(r, t0, t1));
+            }
+            return true;
         }
         return meet({x, y}, i, solve_hit(r, t0, t1), t0);
     }
@@ -212,7 +217,7 @@ public:
                 return Move::Stay;
             }
             if (t_end > t) {
-                near_miss_.valid = false; // every texel passed was clearly in front
+                forget_near_misses(); // every texel passed was clearly in front
             }
             return Move::PieceDone;
         }
@@ -238,7 +243,7 @@ public:
                     y = entered;
                 }
                 if (t_exit > t) {
-                    near_miss_.valid = false; // every texel passed was clearly in front
+                    forget_near_misses(); // every texel passed was clearly in front
                 }
                 t = t_exit;
                 return Move::Moved;
@@ -261,7 +266,7 @@ public:
             return Move::Stay;
         }
         if (t_exit > t) {
-            near_miss_.valid = false; // every texel passed was clearly in front
+            forget_near_misses(); // every texel passed was clearly in front
         }
         if (t_exit >= tb) {
             return Move::PieceDone;
@@ -274,7 +279,7 @@ public:
 
     // Passing through the ball around the probe centre, the ray forgets a surface it passed
     // just in front of: it went on past the probe.
-    void pass_the_centre() { near_miss_.valid = false; }
+    void pass_the_centre() { forget_near_misses(); }
 
     void finish_miss(double t_max) { set_miss(result_, t_max); }
 
@@ -298,17 +303,41 @@ private:
     [[nodiscard]] double thickness(double r) const {
         return settings_.thickness + texel_scale_ * r;
     }
+    // The fallback's reach (TraceSettings::fallback_thickness), never less than the thickness.
+    [[nodiscard]] double fallback_thickness(double r) const {
+        return std::max(settings_.fallback_thickness, settings_.thickness) + texel_scale_ * r;
+    }
+
+    void forget_near_misses() {
+        near_miss_.valid = false;
+        wide_miss_.valid = false;
+    }
+
+    // The UNKNOWN just set keeps the surface of texel `index`, met at t, as its fallback when
+    // the surface faces the ray (a back face is no answer, as for a HIT).
+    void keep_fallback(oct::Texel texel, std::size_t index, double t) {
+        const glm::vec3 normal = map_.normal_at(index);
+        if (glm::dot(glm::dvec3(normal), d_) > 0.0 || !std::isfinite(t)) {
+            return;
+        }
+        result_.has_fallback = true;
+        result_.t_fallback = t;
+        result_.fallback_texel = texel;
+        result_.radiance = map_.radiance_at(index);
+        result_.normal = normal;
+    }
 
     // The squared distance from the probe below which the ray passes clearly in front of every
-    // fine texel under a coarse cell of minimum distance `cell_min` (r − thickness(r) grows
-    // with r since texel_scale_ < 1; less a margin that covers the rounding of the squared
-    // distances compared with it): +inf for an empty cell, −1 where nothing can be passed
-    // (unknown texels, or a surface within its thickness of the probe).
+    // fine texel under a coarse cell of minimum distance `cell_min`, the fallback's reach
+    // included, so that a skip never passes a surface the fallback would keep (r − reach(r)
+    // grows with r since texel_scale_ < 1; less a margin that covers the rounding of the
+    // squared distances compared with it): +inf for an empty cell, −1 where nothing can be
+    // passed (unknown texels, or a surface within its reach of the probe).
     [[nodiscard]] double clear2_of(double cell_min) const {
         if (std::isinf(cell_min)) {
             return kInf;
         }
-        const double clear = cell_min - thickness(cell_min) - 1e-9 * (1.0 + cell_min);
+        const double clear = cell_min - fallback_thickness(cell_min) - 1e-9 * (1.0 + cell_min);
         return clear > 0.0 ? clear * clear : -1.0;
     }
 
@@ -384,6 +413,7 @@ private:
     double origin_length_ = 0.0;
     double texel_scale_ = 0.0;
     NearMiss near_miss_;
+    NearMiss wide_miss_; // as near_miss_, within the fallback thickness
     ProbeTraceResult result_;
 };
 

@@ -37,6 +37,7 @@ nlohmann::json render_settings_json(const RenderSettings& settings) {
     return nlohmann::json{{"mode", field_mode_name(settings.trace.mode)},
                           {"max_probes", settings.trace.max_probes},
                           {"thickness", p.thickness},
+                          {"fallback_thickness", p.fallback_thickness},
                           {"thickness_texels", p.thickness_texels},
                           {"use_coarse_levels", p.use_coarse_levels},
                           {"eye_at_probe_distance", p.eye_at_probe_distance},
@@ -283,6 +284,11 @@ void require_valid_trace_settings(const RenderSettings& settings) {
     if (!std::isfinite(t.thickness) || t.thickness < 0.0) {
         throw InputError("render: thickness must be a finite number of metres, 0 or more (got " +
                          std::to_string(t.thickness) + ")");
+    }
+    if (!std::isfinite(t.fallback_thickness) || t.fallback_thickness < 0.0) {
+        throw InputError(
+            "render: fallback_thickness must be a finite number of metres, 0 or more (got " +
+            std::to_string(t.fallback_thickness) + ")");
     }
     if (!std::isfinite(t.thickness_texels) || t.thickness_texels < 0.0) {
         throw InputError("render: thickness_texels must be a finite number, 0 or more (got " +

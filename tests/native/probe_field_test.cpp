@@ -252,6 +252,38 @@ TEST(Grid, NearestCarriesTheProvenFreeDistanceToTheNextProbe) {
     EXPECT_EQ(r.steps, only_a.steps + b_alone.steps());
 }
 
+TEST(Grid, AFallbackAnswersOnlyWhereNoProbeDoes) {
+    // A ray that runs 2 cm behind the wall probe a saw, as one passing just behind a near
+    // object's edge seen from one station does: probe a answers UNKNOWN, keeping the wall as a
+    // fallback. Alone, the field answers HIT on it. Probe b saw a room whose wall lies further
+    // out (what a second station saw behind the edge): asked after a, its answer stands.
+    const BoxRoomScene room = scenes::empty_box_room();
+    BoxRoomScene wider = room;
+    wider.room_max.x = 2.5f;
+    const glm::dvec3 a(0.0, 0.0, 1.0);
+    const glm::dvec3 b(-1.0, 0.0, 1.0);
+    const Ray ray = make_ray(a + glm::dvec3(2.02, 0.1, 0.1), {0.0, 1.0, 0.05});
+    const ProbeField alone(ProbePlacement::from_positions({a}),
+                           std::vector<ProbeMap>{scenes::analytic_probe(room, a, 1024)});
+    const FieldTraceResult fallback = alone.trace(ray);
+    EXPECT_EQ(fallback.status, TraceStatus::Hit);
+    EXPECT_EQ(fallback.probe, 0);
+    EXPECT_NEAR(fallback.t, 0.0, 1e-9);
+    EXPECT_NE(fallback.texel, (oct::Texel{-1, -1}));
+    FieldTraceSettings off;
+    off.probe.fallback_thickness = off.probe.thickness;
+    EXPECT_EQ(alone.trace(ray, off).status, TraceStatus::Unknown);
+
+    const ProbeField both(ProbePlacement::from_positions({a, b}),
+                          std::vector<ProbeMap>{scenes::analytic_probe(room, a, 1024),
+                                                scenes::analytic_probe(wider, b, 1024)});
+    const FieldTraceResult answered = both.trace(ray);
+    EXPECT_EQ(answered.status, TraceStatus::Hit);
+    EXPECT_EQ(answered.probe, 1);
+    EXPECT_EQ(answered.probes_tried, 2u);
+    EXPECT_NEAR(answered.t, truth(wider, ray), 0.02);
+}
+
 TEST(Grid, ProbeSetsLoadFromDiskAndModesAreChecked) {
     const BoxRoomScene room;
     const PointCloud cloud = room.cloud(0.05f, glm::dvec3(0.0, 0.0, 1.2));

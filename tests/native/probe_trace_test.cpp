@@ -440,13 +440,68 @@ TEST(Trace, ARayTwoCentimetresBehindASurfaceDoesNotMeetIt) {
     const ProbeMap map = scenes::analytic_probe(scene, centre, n);
     const MinDistancePyramid levels(map.distance, n);
     const Ray behind = probe_ray({2.02, 0.1, 0.1}, {0.0, 1.0, 0.05}, 0.0, 0.3);
-    EXPECT_EQ(trace_probe(map, &levels, behind).status, TraceStatus::Unknown);
+    const ProbeTraceResult unknown = trace_probe(map, &levels, behind);
+    EXPECT_EQ(unknown.status, TraceStatus::Unknown);
+    // It keeps the wall as its fallback (2 cm plus the footprint): the field answers with it
+    // only where no other probe answers the ray (Grid.AFallbackAnswersOnlyWhereNoProbeDoes).
+    EXPECT_TRUE(unknown.has_fallback);
+    EXPECT_NEAR(unknown.t_fallback, 0.0, 1e-9); // where the ray comes nearest the wall
+    TraceSettings no_fallback;
+    no_fallback.fallback_thickness = no_fallback.thickness;
+    EXPECT_FALSE(trace_probe(map, &levels, behind, no_fallback).has_fallback);
+    const Ray far_behind = probe_ray({2.05, 0.1, 0.1}, {0.0, 1.0, 0.05}, 0.0, 0.3);
+    const ProbeTraceResult far = trace_probe(map, &levels, far_behind);
+    EXPECT_EQ(far.status, TraceStatus::Unknown);
+    EXPECT_FALSE(far.has_fallback);
     TraceSettings two_centimetres;
     two_centimetres.thickness = 0.02;
     EXPECT_EQ(trace_probe(map, &levels, behind, two_centimetres).status, TraceStatus::Hit);
     // The same ray 5 mm behind the wall is on it.
     const Ray on = probe_ray({2.005, 0.1, 0.1}, {0.0, 1.0, 0.05}, 0.0, 0.3);
     EXPECT_EQ(trace_probe(map, &levels, on).status, TraceStatus::Hit);
+}
+
+TEST(Trace, ARayJustInFrontOfAnEdgeKeepsTheFarSurfaceAsItsFallback) {
+    // A ray running 1.9-2.2 cm in front of a wall (beyond the 1 cm thickness, within the 2 cm
+    // fallback, plus a 1024² texel's footprint each) until a nearer surface's edge, where it is
+    // far behind: UNKNOWN, with the wall it passed just in front of as the fallback. The
+    // earlier 2 cm thickness met the wall there; the pump room's one-station silhouettes are
+    // made of such rays.
+    const BoxRoomScene scene = scenes::empty_box_room();
+    const glm::dvec3 centre(0.0, 0.0, 1.0);
+    const int n = 1024;
+    ProbeMap map = scenes::analytic_probe(scene, centre, n);
+    for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+            const glm::vec3 d = oct::texel_direction({x, y}, n);
+            const std::size_t i = oct::texel_index({x, y}, n);
+            if (d.x > 0.0f && d.y > 0.5f * d.x) {
+                map.distance[i] = 0.8f * map.distance_at(i); // the near surface past the edge
+            }
+        }
+    }
+    const MinDistancePyramid levels(map.distance, n);
+    const Ray along = probe_ray({1.981, 0.0, 0.1}, {0.0, 1.0, 0.0}, 0.0, 1.5);
+    const ProbeTraceResult r = trace_probe(map, &levels, along);
+    EXPECT_EQ(r.status, TraceStatus::Unknown);
+    ASSERT_TRUE(r.has_fallback);
+    EXPECT_NEAR(r.t_fallback, 0.99, 0.02); // at the edge, y = x / 2
+    const glm::vec3 edge = oct::texel_direction(r.fallback_texel, n);
+    EXPECT_NEAR(edge.y / edge.x, 0.5, 0.01);
+    TraceSettings no_fallback;
+    no_fallback.fallback_thickness = no_fallback.thickness;
+    EXPECT_FALSE(trace_probe(map, &levels, along, no_fallback).has_fallback);
+    TraceSettings two_centimetres;
+    two_centimetres.thickness = 0.02;
+    const ProbeTraceResult met = trace_probe(map, &levels, along, two_centimetres);
+    EXPECT_EQ(met.status, TraceStatus::Hit);
+    EXPECT_EQ(met.texel, r.fallback_texel);
+    // Without the coarse levels the walk keeps the same fallback (a skip never passes it).
+    TraceSettings fine_only;
+    fine_only.use_coarse_levels = false;
+    const ProbeTraceResult fine = trace_probe(map, &levels, along, fine_only);
+    EXPECT_EQ(fine.fallback_texel, r.fallback_texel);
+    EXPECT_EQ(fine.t_fallback, r.t_fallback);
 }
 
 TEST(Trace, StartsAtTMinAndStopsAtTMax) {

@@ -38,10 +38,11 @@ def test_an_obj_without_faces_exits_2(tmp_path, name, text):
     assert not (tmp_path / "gt.exr").exists()
 
 
+@pytest.mark.parametrize("option", ["--thickness", "--fallback-thickness"])
 @pytest.mark.parametrize("thickness", ["nan", "inf", "-inf", "-0.5"])
-def test_a_thickness_that_is_not_a_finite_length_exits_2(baked_set, tmp_path, thickness):
+def test_a_thickness_that_is_not_a_finite_length_exits_2(baked_set, tmp_path, option, thickness):
     result = run_cli("render", "--probes", baked_set, "--camera", _camera(tmp_path / "cam.json"),
-                     "--out", tmp_path / "view.exr", f"--thickness={thickness}")
+                     "--out", tmp_path / "view.exr", f"{option}={thickness}")
     _assert_bad_input(result, "thickness")
     assert not (tmp_path / "view.exr").exists()
 

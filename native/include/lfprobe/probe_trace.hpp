@@ -46,6 +46,13 @@ struct TraceSettings {
     // and +0.17 from 0.25°, +0.26 and +0.18 from 1°; a view outside the grid -0.19 to -0.26 dB,
     // its rays more often honestly UNKNOWN (its answered pixels +0.2 dB).
     double thickness = 0.01;
+    // A ray that stops UNKNOWN behind a stored surface, having come within this distance (plus
+    // the same texel term) of it or of one it passed just in front of, keeps that surface as a
+    // fallback answer: the probe field answers HIT on it when no later probe answers the ray and
+    // none proves the ray free past it. Where one station saw a near object's edge, no probe
+    // sees behind it, and without the fallback the edge's rays would end UNKNOWN. At most
+    // `thickness` turns the fallback off.
+    double fallback_thickness = 0.02;
     // Plus this many texel footprints at the surface's distance (footprint = distance × the
     // texel's angular size, sqrt(4π)/N): grazing surfaces change distance across a texel.
     double thickness_texels = 1.0;
@@ -76,6 +83,12 @@ struct ProbeTraceResult {
     oct::Texel texel{-1, -1};
     glm::vec3 radiance{0.0f};       // HIT: the texel's linear RGB
     glm::vec3 normal{0.0f};         // HIT: the texel's stored normal
+    // UNKNOWN: whether the ray met a surface facing it within the fallback thickness (passed
+    // behind the stopping texel's, or just in front of one before it); then t_fallback,
+    // fallback_texel, radiance and normal are that meeting's.
+    bool has_fallback = false;
+    double t_fallback = std::numeric_limits<double>::infinity();
+    oct::Texel fallback_texel{-1, -1};
     std::uint32_t fine_steps = 0;   // fine texels visited
     std::uint32_t coarse_steps = 0; // coarse cells tested
 

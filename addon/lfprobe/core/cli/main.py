@@ -183,6 +183,7 @@ def _cmd_render(args) -> int:
     _native = native.load()
     job = _native.start_render(args.probes, args.camera, args.out, mode=args.mode,
                                threads=args.threads, thickness=args.thickness,
+                               fallback_thickness=args.fallback_thickness,
                                storage=None if args.storage == "manifest" else args.storage,
                                distance_step=args.distance_step, **fidelity_options(args))
     stats = job.run(None if args.quiet else TerminalProgress())
@@ -325,6 +326,12 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--thickness", type=finite_float, default=defaults.trace("thickness"),
                         help="surface thickness (m; a texel footprint at the surface's distance is added; "
                              f"default {defaults.trace('thickness'):g})")
+    render.add_argument("--fallback-thickness", type=finite_float,
+                        default=defaults.trace("fallback_thickness"),
+                        metavar="M",
+                        help="a ray that no probe answers meets the surface it stopped behind, if it came "
+                             "within this distance of it (m; plus a texel footprint; at most --thickness: "
+                             f"never; default {defaults.trace('fallback_thickness'):g})")
     add_fidelity_arguments(render)
     render.add_argument("--json", action="store_true", help="print the stats as JSON")
     render.add_argument("--quiet", action="store_true")

@@ -11,16 +11,19 @@ from .. import defaults
 # The renderer's own defaults: the report's default setting is the one users get.
 _MODE = defaults.trace("mode")
 _THICKNESS = defaults.trace("thickness")
+_FALLBACK = defaults.trace("fallback_thickness")
 # Trace settings: (label, render keyword arguments). The first is the default setting.
-DEFAULT_TRACE = (f"default ({_MODE}, {_THICKNESS * 100:g} cm, coarse levels)",
-                 {"mode": _MODE, "thickness": _THICKNESS, "use_coarse_levels": True})
+DEFAULT_TRACE = (f"default ({_MODE}, {_THICKNESS * 100:g} cm, {_FALLBACK * 100:g} cm fallback, coarse levels)",
+                 {"mode": _MODE, "thickness": _THICKNESS, "fallback_thickness": _FALLBACK,
+                  "use_coarse_levels": True})
 TRACE_VARIANTS = [
     DEFAULT_TRACE,
     ("no coarse levels", {**DEFAULT_TRACE[1], "use_coarse_levels": False}),
     # Coarse resolution: the coarsest min-distance level kept (ProbeField.load(coarse_resolution)).
     ("coarse levels down to 32²", {**DEFAULT_TRACE[1], "coarse_resolution": 32}),
     ("nearest-first (no grid walk)", {**DEFAULT_TRACE[1], "mode": "nearest"}),
-    ("thickness 2 cm (the default before)", {**DEFAULT_TRACE[1], "thickness": 0.02}),
+    ("no fallback (1 cm alone, the default before)", {**DEFAULT_TRACE[1], "fallback_thickness": 0.0}),
+    ("thickness 2 cm (before that)", {**DEFAULT_TRACE[1], "thickness": 0.02}),
     ("thickness 5 cm", {**DEFAULT_TRACE[1], "thickness": 0.05}),
     # The paper's colour: the first probe that answers, its one texel (no filter, no blending).
     ("first hit, nearest texel (the paper)", {**DEFAULT_TRACE[1], "filter": "nearest", "blend": 1}),

@@ -133,6 +133,7 @@ def _row(setup: ProbeSetup, bake_info: dict, memory_per_probe: float, trace_labe
          trace: dict, view: str) -> Dict[str, object]:
     row = {"setting": "", "view": view, **setup.describe(), "trace": trace_label,
            "mode": trace["mode"], "thickness": trace["thickness"],
+           "fallback_thickness": trace.get("fallback_thickness", 0.0),
            "coarse_levels": trace["use_coarse_levels"],
            "coarse_resolution": int(trace.get("coarse_resolution", 0)) or 1,
            "storage": trace.get("storage", "full"),
