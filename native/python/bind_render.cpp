@@ -205,8 +205,8 @@ void bind_render(py::module_& m) {
             "render",
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
                const std::string& output, const std::string& mode, int threads, double thickness,
-               bool use_coarse_levels, int tile_size, int spp, const std::string& filter,
-               int blend, double fallback_thickness) {
+               bool use_coarse_levels, int tile_size, int spp, const std::string& filter, int blend,
+               double fallback_thickness) {
                 const Camera cam = camera_from(camera);
                 const RenderSettings settings =
                     render_settings(mode, thickness, use_coarse_levels, tile_size,

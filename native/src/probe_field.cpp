@@ -90,7 +90,9 @@ struct FieldQuery {
     }
 
     // A probe's fallback meeting (ProbeTraceResult::has_fallback): the nearest along the ray
-    // is kept, unless a probe has proven the ray free past it.
+    // is kept. A later probe that proves the ray free past it does not drop it: that probe
+    // judged with the 1 cm thickness, and on a one-station scan its view behind the edge is
+    // the hole fill's guess (the pump room's silhouettes stayed UNKNOWN when it did).
     void keep_fallback(std::size_t index, const ProbeTraceResult& r) {
         if (!r.has_fallback) {
             return;
@@ -102,8 +104,7 @@ struct FieldQuery {
         fallback_probe = index;
     }
 
-    // No probe answered: a HIT on the kept fallback when no probe proved the ray free past
-    // it, else UNKNOWN.
+    // No probe answered: a HIT on the kept fallback, else UNKNOWN.
     void finish_unanswered() {
         result.status = TraceStatus::Unknown;
         if (!fallback.has_fallback) {

@@ -81,8 +81,8 @@ struct ProbeTraceResult {
     double free_until = 0.0;
     // HIT: the texel met; UNKNOWN: the texel that stopped the trace; MISS: {-1, -1}.
     oct::Texel texel{-1, -1};
-    glm::vec3 radiance{0.0f};       // HIT: the texel's linear RGB
-    glm::vec3 normal{0.0f};         // HIT: the texel's stored normal
+    glm::vec3 radiance{0.0f}; // HIT: the texel's linear RGB
+    glm::vec3 normal{0.0f};   // HIT: the texel's stored normal
     // UNKNOWN: whether the ray met a surface facing it within the fallback thickness (passed
     // behind the stopping texel's, or just in front of one before it); then t_fallback,
     // fallback_texel, radiance and normal are that meeting's.
