@@ -53,7 +53,8 @@ def test_bake_render_compare_end_to_end():
 
     out = os.path.join(folder, "view.exr")
     cam_json = os.path.join(folder, "camera.json")
-    result = probe_scene.run_batch(blend, "render", "--out", out, "--camera-json", cam_json, "--threads", "1")
+    result = probe_scene.run_batch(blend, "render", "--out", out, "--camera-json", cam_json, "--threads", "1",
+                                   "--fallback-thickness", "0.03")
     assert result.returncode == 0, result.stdout + result.stderr
     _check(result, "rays/s")
     native = helpers.addon("core.native").load()
@@ -64,7 +65,7 @@ def test_bake_render_compare_end_to_end():
     # default Pixel Samples, 2×2), gives the same image.
     cli_out = os.path.join(folder, "cli.exr")
     cli = probe_scene.lfprobe_cli("render", "--probes", os.path.join(folder, "probes"), "--camera", cam_json,
-                                  "--out", cli_out, "--threads", "1", "--spp", "4")
+                                  "--out", cli_out, "--threads", "1", "--spp", "4", "--fallback-thickness", "0.03")
     assert cli.returncode == 0, cli.stderr
     again = native.read_image(cli_out)
     assert (again["rgba"] == image["rgba"]).all() and (again["status"] == image["status"]).all()

@@ -224,6 +224,7 @@ def test_engine_settings_choose_the_grid():
     scene.lfprobe_render.mode = "nearest"
     scene.lfprobe_render.threads = 1
     assert probe_view.trace_settings(scene) == {"mode": "nearest", "thickness": scene.lfprobe_render.thickness,
+                                                "fallback_thickness": scene.lfprobe_render.fallback_thickness,
                                                 "threads": 1, "filter": "bilinear", "blend": 4}
     scene.lfprobe_render.radiance_filter = "nearest"
     scene.lfprobe_render.blend = 1
@@ -239,6 +240,8 @@ def test_settings_default_to_the_native_cores_defaults():
     defaults = helpers.addon("core.native").load().DEFAULTS
     render = bpy.context.scene.lfprobe_render.bl_rna.properties
     assert math.isclose(render["thickness"].default, defaults["trace"]["thickness"], rel_tol=1e-6)
+    assert math.isclose(render["fallback_thickness"].default, defaults["trace"]["fallback_thickness"],
+                        rel_tol=1e-6)
     assert render["mode"].default == defaults["trace"]["mode"]
     assert render["radiance_filter"].default == defaults["trace"]["filter"]
     assert render["blend"].default == defaults["trace"]["blend"]

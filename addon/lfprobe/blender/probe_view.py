@@ -91,7 +91,8 @@ def coarse_resolution(grid_obj) -> int:
 def trace_settings(scene) -> dict:
     """The scene's trace settings as keyword arguments of ProbeField.render."""
     settings = render_settings(scene)
-    return {"mode": settings.mode.lower(), "thickness": float(settings.thickness), "threads": int(settings.threads),
+    return {"mode": settings.mode.lower(), "thickness": float(settings.thickness),
+            "fallback_thickness": float(settings.fallback_thickness), "threads": int(settings.threads),
             "filter": settings.radiance_filter, "blend": int(settings.blend)}
 
 

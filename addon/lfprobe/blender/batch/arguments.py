@@ -90,6 +90,9 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--mode", choices=["auto", "nearest", "grid"], default=None,
                         help="probe order (default: the scene's render setting)")
     render.add_argument("--thickness", type=finite_float, default=None, help="surface thickness in metres")
+    render.add_argument("--fallback-thickness", type=finite_float, default=None, metavar="M",
+                        help="a ray no probe answers meets the surface it stopped behind within M metres "
+                             "(default: the scene's render setting)")
     render.add_argument("--threads", type=int, default=None, help="cores (0: all); the image is the same")
     render.add_argument("--spp", type=int, default=None, metavar="N",
                         help="samples per pixel, 1 or a square (default: the scene's Pixel Samples squared)")

@@ -1,5 +1,6 @@
 """The scene's trace settings (``scene.lfprobe_render``): which baked grid F12, the viewport
-and Compare trace, and how (probe order, thickness, samples, filter, blending, threads)."""
+and Compare trace, and how (probe order, thickness and fallback, samples, filter, blending,
+threads)."""
 
 from __future__ import annotations
 
@@ -45,6 +46,18 @@ class LFProbeRenderSettings(bpy.types.PropertyGroup):
         min=0.0,
         soft_max=0.2,
         default=defaults.trace("thickness"),
+        unit="LENGTH",
+        precision=3,
+        update=_redraw_viewports,
+    )
+    fallback_thickness: FloatProperty(
+        name="Fallback",
+        description="A ray that no probe answers meets the surface it stopped behind if it came this "
+                    "close to it: a near object's edge that one scan station saw (at most the "
+                    "Thickness: never)",
+        min=0.0,
+        soft_max=0.2,
+        default=defaults.trace("fallback_thickness"),
         unit="LENGTH",
         precision=3,
         update=_redraw_viewports,

@@ -31,6 +31,7 @@ class RENDER_PT_lfprobe_trace(bpy.types.Panel):
                          icon="INFO" if baked else "ERROR")
         layout.prop(settings, "mode")
         layout.prop(settings, "thickness")
+        layout.prop(settings, "fallback_thickness")
         layout.prop(settings, "samples")
         layout.prop(settings, "radiance_filter")
         layout.prop(settings, "blend")
