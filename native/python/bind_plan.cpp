@@ -14,6 +14,7 @@
 #include "binding_helpers.hpp"
 #include "bindings.hpp"
 #include "job.hpp"
+#include "lfprobe/cloud_bake.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/local_geometry.hpp"
 #include "lfprobe/probe_placement.hpp"
@@ -138,23 +139,23 @@ void bind_plan(py::module_& m) {
         [](std::shared_ptr<PointCloud> cloud, const std::string& folder,
            std::vector<std::vector<double>> positions, std::optional<std::vector<double>> grid_min,
            std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
-           const std::string& sources_json, const py::dict& options) {
+           const std::string& sources_json, const py::dict& options, const std::string& cache_dir) {
             const PlanSettings settings = plan_settings_from(options);
             const ProbePlacement placement =
                 placement_from(positions, grid_min, grid_max, counts, cloud->world_offset);
             const nlohmann::json sources = sources_from(sources_json);
             return std::make_unique<Job>(
                 std::function<BakeSummary(Progress&)>([=](Progress& progress) {
-                    const auto start = std::chrono::steady_clock::now();
-                    const LocalGeometry geometry = estimate_local_geometry(*cloud, {}, &progress);
-                    const double normals_seconds =
-                        std::chrono::duration<double>(std::chrono::steady_clock::now() - start)
-                            .count();
+                    const CloudBakeSource source =
+                        prepare_cloud_bake(cloud, settings.bake, {}, &progress, cache_dir);
                     const ProbePlan plan =
-                        plan_probes(*cloud, geometry, placement, settings, &progress);
-                    BakeSummary summary = bake_planned_probe_set(
-                        *cloud, geometry, placement, plan, settings, folder, sources, &progress);
-                    summary.normals_seconds = normals_seconds;
+                        plan_probes(*cloud, source.geometry, placement, settings, &progress);
+                    BakeSummary summary =
+                        bake_planned_probe_set(*cloud, source.geometry, placement, plan, settings,
+                                               folder, sources, &progress, &source.hierarchy);
+                    summary.normals_seconds = source.normals_seconds;
+                    summary.hierarchy_seconds = source.hierarchy_seconds;
+                    summary.prepared_from_cache = source.from_cache;
                     return summary;
                 }),
                 std::function<py::object(BakeSummary &&)>(
@@ -163,10 +164,10 @@ void bind_plan(py::module_& m) {
         py::arg("cloud"), py::arg("folder"),
         py::arg("positions") = std::vector<std::vector<double>>{}, py::arg("grid_min") = py::none(),
         py::arg("grid_max") = py::none(), py::arg("counts") = py::none(),
-        py::arg("sources_json") = "[]", py::arg("options") = py::dict(),
+        py::arg("sources_json") = "[]", py::arg("options") = py::dict(), py::arg("cache_dir") = "",
         "Start planning and baking a probe set (bake --auto): each probe at its planned position "
         "and resolution, dropped probes as all-unknown placeholders; the plan goes into the "
-        "manifest. The Job's result is the summary dict.");
+        "manifest. cache_dir as bake_probe_set's. The Job's result is the summary dict.");
 }
 
 } // namespace lfprobe::python

@@ -67,27 +67,30 @@ void bind_staged_bake(py::module_& m) {
         .def_property_readonly("normals_seconds",
                                [](const CloudBakeSource& s) { return s.normals_seconds; })
         .def_property_readonly("hierarchy_seconds",
-                               [](const CloudBakeSource& s) { return s.hierarchy_seconds; });
+                               [](const CloudBakeSource& s) { return s.hierarchy_seconds; })
+        .def_property_readonly("from_cache", [](const CloudBakeSource& s) { return s.from_cache; });
 
     m.def(
         "start_prepare_cloud_bake",
-        [](std::shared_ptr<PointCloud> cloud, const py::dict& settings) {
+        [](std::shared_ptr<PointCloud> cloud, const py::dict& settings,
+           const std::string& cache_dir) {
             const CloudBakeOptions options = cloud_bake_options_from(settings);
             std::shared_ptr<const PointCloud> shared = std::move(cloud);
             return std::make_unique<Job>(
-                std::function<CloudBakeSource(Progress&)>([shared, options](Progress& progress) {
-                    return prepare_cloud_bake(shared, options.settings, options.geometry,
-                                              &progress);
-                }),
+                std::function<CloudBakeSource(Progress&)>(
+                    [shared, options, cache_dir](Progress& progress) {
+                        return prepare_cloud_bake(shared, options.settings, options.geometry,
+                                                  &progress, cache_dir);
+                    }),
                 std::function<py::object(CloudBakeSource &&)>([](CloudBakeSource&& s) {
                     return py::cast(std::make_shared<CloudBakeSource>(std::move(s)));
                 }));
         },
-        py::arg("cloud"), py::arg("settings") = py::dict(),
+        py::arg("cloud"), py::arg("settings") = py::dict(), py::arg("cache_dir") = "",
         "Start making a cloud ready to bake from; settings as bake_probe_set's keywords "
         "(resolution, splat_scale, hole_fill_texels, max_splat_radius_texels, normal_neighbours, "
-        "lod_texels, splat_edge_margin, splat_core_scale, face_the_probe). The Job's result is a "
-        "CloudBakeSource.");
+        "lod_texels, splat_edge_margin, splat_core_scale, face_the_probe); cache_dir as "
+        "bake_probe_set's. The Job's result is a CloudBakeSource.");
 
     m.def(
         "cloud_bake_manifest",

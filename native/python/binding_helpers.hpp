@@ -172,6 +172,7 @@ inline pybind11::dict bake_summary_dict(const BakeSummary& s, bool with_normals)
     if (with_normals) {
         d["normals_seconds"] = s.normals_seconds;
         d["hierarchy_seconds"] = s.hierarchy_seconds;
+        d["prepared_from_cache"] = s.prepared_from_cache;
     }
     d["bake_seconds"] = s.bake_seconds;
     d["write_seconds"] = s.write_seconds;

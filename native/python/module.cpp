@@ -99,6 +99,7 @@ struct BakeRequest {
     std::string sources_json = "[]";
     BakeSettings settings;
     LocalGeometryOptions geometry;
+    std::string cache_dir; // the prepared-cloud cache; empty: none
 };
 
 std::unique_ptr<Job> start_bake(std::shared_ptr<PointCloud> cloud, BakeRequest request) {
@@ -110,7 +111,7 @@ std::unique_ptr<Job> start_bake(std::shared_ptr<PointCloud> cloud, BakeRequest r
         std::function<BakeSummary(Progress&)>([cloud, request, placement,
                                                sources](Progress& progress) {
             return bake_probe_set_from_cloud(*cloud, placement, request.settings, request.geometry,
-                                             request.folder, sources, &progress);
+                                             request.folder, sources, &progress, request.cache_dir);
         }),
         std::function<py::object(BakeSummary &&)>(
             [](BakeSummary&& s) -> py::object { return bake_summary_dict(s, true); }));
@@ -136,8 +137,10 @@ BakeRequest make_request(const std::string& folder, int resolution,
                          std::optional<std::vector<int>> counts, bool positions_in_world,
                          const std::string& sources_json, float splat_scale, int hole_fill_texels,
                          int max_splat_radius_texels, int normal_neighbours, float lod_texels,
-                         float splat_edge_margin, float splat_core_scale) {
+                         float splat_edge_margin, float splat_core_scale,
+                         const std::string& cache_dir) {
     BakeRequest r;
+    r.cache_dir = cache_dir;
     r.folder = folder;
     r.resolution = resolution;
     r.positions = std::move(positions);
@@ -455,20 +458,22 @@ PYBIND11_MODULE(_native, m) {
         py::arg("world_offset") = py::none(), py::arg("columns") = "", py::arg("cache_dir") = "",
         py::arg("progress") = py::none(), "load_scans run to the end; see start_load_scans.");
 
-    auto start_bake_fn =
-        [](std::shared_ptr<PointCloud> cloud, const std::string& folder, int resolution,
-           std::vector<std::vector<double>> positions, std::optional<std::vector<double>> grid_min,
-           std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
-           bool positions_in_world, const std::string& sources_json, float splat_scale,
-           int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours,
-           float lod_texels, float splat_edge_margin, float splat_core_scale) {
-            return start_bake(
-                std::move(cloud),
-                make_request(folder, resolution, std::move(positions), std::move(grid_min),
-                             std::move(grid_max), std::move(counts), positions_in_world,
-                             sources_json, splat_scale, hole_fill_texels, max_splat_radius_texels,
-                             normal_neighbours, lod_texels, splat_edge_margin, splat_core_scale));
-        };
+    auto start_bake_fn = [](std::shared_ptr<PointCloud> cloud, const std::string& folder,
+                            int resolution, std::vector<std::vector<double>> positions,
+                            std::optional<std::vector<double>> grid_min,
+                            std::optional<std::vector<double>> grid_max,
+                            std::optional<std::vector<int>> counts, bool positions_in_world,
+                            const std::string& sources_json, float splat_scale,
+                            int hole_fill_texels, int max_splat_radius_texels,
+                            int normal_neighbours, float lod_texels, float splat_edge_margin,
+                            float splat_core_scale, const std::string& cache_dir) {
+        return start_bake(std::move(cloud),
+                          make_request(folder, resolution, std::move(positions),
+                                       std::move(grid_min), std::move(grid_max), std::move(counts),
+                                       positions_in_world, sources_json, splat_scale,
+                                       hole_fill_texels, max_splat_radius_texels, normal_neighbours,
+                                       lod_texels, splat_edge_margin, splat_core_scale, cache_dir));
+    };
     const BakeSettings defaults;
     const LocalGeometryOptions geometry_defaults;
     m.def("start_bake_probe_set", start_bake_fn, py::arg("cloud"), py::arg("folder"),
@@ -482,11 +487,13 @@ PYBIND11_MODULE(_native, m) {
           py::arg("normal_neighbours") = geometry_defaults.normal_neighbours,
           py::arg("lod_texels") = defaults.lod_texels,
           py::arg("splat_edge_margin") = defaults.splat_edge_margin,
-          py::arg("splat_core_scale") = defaults.splat_core_scale,
+          py::arg("splat_core_scale") = defaults.splat_core_scale, py::arg("cache_dir") = "",
           "Start baking a probe set from a cloud into `folder`; positions or grid corners are "
           "world coordinates unless positions_in_world is False. lod_texels: how many texels "
           "apart the point hierarchy's cell surfels may be where they stand in for points (0: "
-          "every point). The Job's result is a summary dict.");
+          "every point). cache_dir: the cloud's normals, spacing and point hierarchy are read "
+          "from this folder's prepared-cloud cache when it holds them, and written there "
+          "otherwise (empty: computed, not cached). The Job's result is a summary dict.");
     m.def(
         "bake_probe_set",
         [start_bake_fn](
@@ -496,12 +503,12 @@ PYBIND11_MODULE(_native, m) {
             bool positions_in_world, const std::string& sources_json, float splat_scale,
             int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours,
             float lod_texels, float splat_edge_margin, float splat_core_scale,
-            const py::object& progress) {
+            const std::string& cache_dir, const py::object& progress) {
             auto job = start_bake_fn(std::move(cloud), folder, resolution, std::move(positions),
                                      std::move(grid_min), std::move(grid_max), std::move(counts),
                                      positions_in_world, sources_json, splat_scale,
                                      hole_fill_texels, max_splat_radius_texels, normal_neighbours,
-                                     lod_texels, splat_edge_margin, splat_core_scale);
+                                     lod_texels, splat_edge_margin, splat_core_scale, cache_dir);
             return job->run(progress);
         },
         py::arg("cloud"), py::arg("folder"), py::arg("resolution") = defaults.resolution,
@@ -514,8 +521,8 @@ PYBIND11_MODULE(_native, m) {
         py::arg("normal_neighbours") = geometry_defaults.normal_neighbours,
         py::arg("lod_texels") = defaults.lod_texels,
         py::arg("splat_edge_margin") = defaults.splat_edge_margin,
-        py::arg("splat_core_scale") = defaults.splat_core_scale, py::arg("progress") = py::none(),
-        "bake run to the end; see start_bake_probe_set.");
+        py::arg("splat_core_scale") = defaults.splat_core_scale, py::arg("cache_dir") = "",
+        py::arg("progress") = py::none(), "bake run to the end; see start_bake_probe_set.");
 
     lfprobe::python::bind_render(m);
     lfprobe::python::bind_mesh(m);

@@ -1,8 +1,11 @@
 #include "lfprobe/cloud_bake.hpp"
 
 #include <chrono>
+#include <filesystem>
+#include <optional>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/prepared_cloud_cache.hpp"
 
 namespace lfprobe {
 
@@ -18,8 +21,8 @@ double seconds_since(std::chrono::steady_clock::time_point start) {
 
 CloudBakeSource prepare_cloud_bake(std::shared_ptr<const PointCloud> cloud,
                                    const BakeSettings& settings,
-                                   const LocalGeometryOptions& geometry_options,
-                                   Progress* progress) {
+                                   const LocalGeometryOptions& geometry_options, Progress* progress,
+                                   const std::string& cache_dir) {
     if (!cloud || cloud->size() == 0) {
         throw InputError("bake: the point cloud is empty");
     }
@@ -28,11 +31,33 @@ CloudBakeSource prepare_cloud_bake(std::shared_ptr<const PointCloud> cloud,
     source.settings = settings;
     source.geometry_options = geometry_options;
     const auto start = std::chrono::steady_clock::now();
+    std::string entry;
+    PreparedCloudKey key;
+    if (!cache_dir.empty()) {
+        key = prepared_cloud_key(*source.cloud, geometry_options, settings.lod_texels > 0.0f);
+        entry = prepared_cloud_entry_path(key, cache_dir);
+        if (std::optional<PreparedCloud> cached = read_prepared_cloud(entry, key)) {
+            source.geometry = std::move(cached->geometry);
+            source.hierarchy = std::move(cached->hierarchy);
+            source.normals_seconds = seconds_since(start);
+            source.from_cache = true;
+            return source;
+        }
+    }
     source.geometry = estimate_local_geometry(*source.cloud, geometry_options, progress);
     source.normals_seconds = seconds_since(start);
     const auto hierarchy_start = std::chrono::steady_clock::now();
     source.hierarchy = hierarchy_for_bakes(*source.cloud, source.geometry, settings, progress);
     source.hierarchy_seconds = seconds_since(hierarchy_start);
+    if (!entry.empty()) {
+        try {
+            write_prepared_cloud(entry, key, source.geometry, source.hierarchy);
+        } catch (const IoError&) {
+            // A cache that cannot be written (a full disk, a read-only folder): the bake goes
+            // on; the next one computes again.
+        } catch (const std::filesystem::filesystem_error&) {
+        }
+    }
     return source;
 }
 
@@ -81,7 +106,7 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
                                       const BakeSettings& settings,
                                       const LocalGeometryOptions& geometry_options,
                                       const std::string& folder, const json& sources,
-                                      Progress* progress) {
+                                      Progress* progress, const std::string& cache_dir) {
     if (placement.positions.empty()) {
         throw InputError("bake: no probe positions given");
     }
@@ -91,7 +116,7 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
     // The caller keeps the cloud alive for the call: a pointer that owns nothing.
     const std::shared_ptr<const PointCloud> borrowed(std::shared_ptr<const PointCloud>{}, &cloud);
     const CloudBakeSource source =
-        prepare_cloud_bake(borrowed, settings, geometry_options, progress);
+        prepare_cloud_bake(borrowed, settings, geometry_options, progress, cache_dir);
     BakeSummary summary = write_probe_set(
         folder, cloud_bake_manifest(cloud, placement, settings, geometry_options, sources),
         [&](std::size_t i) {
@@ -101,6 +126,7 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
         progress);
     summary.normals_seconds = source.normals_seconds;
     summary.hierarchy_seconds = source.hierarchy_seconds;
+    summary.prepared_from_cache = source.from_cache;
     return summary;
 }
 

@@ -195,7 +195,8 @@ ProbePlan plan_probes(const PointCloud& cloud, const LocalGeometry& geometry,
 BakeSummary bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry& geometry,
                                    const ProbePlacement& placement, const ProbePlan& plan,
                                    const PlanSettings& settings, const std::string& folder,
-                                   const json& sources, Progress* progress) {
+                                   const json& sources, Progress* progress,
+                                   const PointHierarchy* prepared) {
     if (plan.probes.size() != placement.positions.size()) {
         throw InputError("bake: the plan has " + std::to_string(plan.probes.size()) +
                          " probes, the placement " + std::to_string(placement.positions.size()));
@@ -216,7 +217,11 @@ BakeSummary bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry&
                               {"plan", plan.to_json(cloud.world_offset)}});
     manifest.sources = sources;
     const auto hierarchy_start = std::chrono::steady_clock::now();
-    const PointHierarchy hierarchy = hierarchy_for_bakes(cloud, geometry, settings.bake, progress);
+    PointHierarchy built;
+    if (prepared == nullptr) {
+        built = hierarchy_for_bakes(cloud, geometry, settings.bake, progress);
+    }
+    const PointHierarchy& hierarchy = prepared != nullptr ? *prepared : built;
     const double hierarchy_seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - hierarchy_start).count();
     BakeSummary summary = write_probe_set(

@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -16,10 +15,10 @@
 #include <optional>
 #include <type_traits>
 
-#include <fcntl.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "cache_file.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/mapped_file.hpp"
 
@@ -237,46 +236,8 @@ template <class T>
     }
 }
 
-// Writes all of `size` bytes or throws.
-void write_all(int fd, const void* data, std::size_t size, const std::string& name) {
-    const auto* bytes = static_cast<const char*>(data);
-    while (size > 0) {
-        const ssize_t written = ::write(fd, bytes, size);
-        if (written < 0) {
-            if (errno == EINTR) {
-                continue;
-            }
-            throw IoError(name + ": cannot write (" + std::strerror(errno) + ")");
-        }
-        bytes += written;
-        size -= static_cast<std::size_t>(written);
-    }
-}
-
-// Removes the temporary file unless the rename made it the entry.
-class TemporaryFile {
-public:
-    explicit TemporaryFile(fs::path path) : path_(std::move(path)) {}
-    ~TemporaryFile() {
-        if (!committed_) {
-            std::error_code ignored;
-            fs::remove(path_, ignored);
-        }
-    }
-    TemporaryFile(const TemporaryFile&) = delete;
-    TemporaryFile& operator=(const TemporaryFile&) = delete;
-    [[nodiscard]] const fs::path& path() const { return path_; }
-    void commit() { committed_ = true; }
-
-private:
-    fs::path path_;
-    bool committed_ = false;
-};
-
 void write_entry(const fs::path& entry, const CacheKey& key, const ScanFile& scan) {
-    static std::atomic<std::uint64_t> counter{0};
-    TemporaryFile temporary(entry.string() + ".tmp." + std::to_string(::getpid()) + "." +
-                            std::to_string(counter++));
+    cache_file::TemporaryFile temporary(entry);
     const std::string name = temporary.path().string();
 
     CacheHeader header{};
@@ -310,27 +271,24 @@ void write_entry(const fs::path& entry, const CacheKey& key, const ScanFile& sca
         header.payload_hash = XXH3_64bits_digest(&state);
     }
 
-    const int fd = ::open(name.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
-    if (fd < 0) {
-        throw IoError(name + ": cannot create (" + std::strerror(errno) + ")");
-    }
+    const int fd = cache_file::create_for_writing(name);
     try {
-        write_all(fd, &header, sizeof(header), name);
-        write_all(fd, key.absolute_path.data(), key.absolute_path.size(), name);
-        write_all(fd, key.columns.data(), key.columns.size(), name);
-        write_all(fd, scan.positions.data(), scan.positions.size() * sizeof(glm::vec3), name);
-        write_all(fd, scan.colors.data(), scan.colors.size() * sizeof(glm::vec3), name);
-        write_all(fd, scan.normals.data(), scan.normals.size() * sizeof(glm::vec3), name);
-        write_all(fd, scan.intensities.data(), scan.intensities.size() * sizeof(float), name);
+        cache_file::write_all(fd, &header, sizeof(header), name);
+        cache_file::write_all(fd, key.absolute_path.data(), key.absolute_path.size(), name);
+        cache_file::write_all(fd, key.columns.data(), key.columns.size(), name);
+        cache_file::write_all(fd, scan.positions.data(), scan.positions.size() * sizeof(glm::vec3),
+                              name);
+        cache_file::write_all(fd, scan.colors.data(), scan.colors.size() * sizeof(glm::vec3), name);
+        cache_file::write_all(fd, scan.normals.data(), scan.normals.size() * sizeof(glm::vec3),
+                              name);
+        cache_file::write_all(fd, scan.intensities.data(), scan.intensities.size() * sizeof(float),
+                              name);
     } catch (...) {
         ::close(fd);
         throw;
     }
-    if (::close(fd) != 0) {
-        throw IoError(name + ": cannot write (" + std::strerror(errno) + ")");
-    }
-    fs::rename(temporary.path(), entry);
-    temporary.commit();
+    cache_file::close_written(fd, name);
+    temporary.commit_as(entry);
 }
 
 } // namespace

@@ -34,6 +34,34 @@ def test_bake_and_info_on_the_pump_room_scan(shared_data, tmp_path):
     assert set(as_json["coverage"]) == {"surface", "inferred", "empty", "unknown"}
 
 
+def test_a_rebake_reads_the_prepared_cloud_and_writes_the_same_probes(shared_data, tmp_path):
+    """The cloud's normals, spacing and point hierarchy are cached beside the parsed scan: a
+    second bake of the same scan (here at another grid) reads them and bakes what computing
+    them gives, byte for byte; a planned bake reads them too; --no-cache writes none."""
+    scan = os.path.join(shared_data, "scans", "pumpA_xyzrgb.xyz")
+    cache = tmp_path / "cache"
+
+    def bake(out, *extra):
+        result = run_cli("bake", "--scan", scan, "--scanner", 0, 0, 0, "--grid-min", -1, -1, -0.5,
+                         "--grid-max", 1, 1, -0.5, "--counts", 2, 1, 1, "--res", 32, "--out", out,
+                         "--json", *extra, check=True)
+        return json.loads(result.stdout)
+
+    first = bake(tmp_path / "a", "--cache", cache)
+    assert first["prepared_from_cache"] is False
+    assert len(list(cache.glob("prepared-*.lfpprep"))) == 1
+    second = bake(tmp_path / "b", "--cache", cache)
+    assert second["prepared_from_cache"] is True
+    uncached = bake(tmp_path / "c", "--no-cache")
+    assert uncached["prepared_from_cache"] is False
+    for name in ("probe_00000.exr", "probe_00001.exr"):
+        assert (tmp_path / "b" / name).read_bytes() == (tmp_path / "c" / name).read_bytes()
+    assert bake(tmp_path / "d", "--cache", cache, "--auto")["prepared_from_cache"] is True
+    no_cache = tmp_path / "none"
+    bake(tmp_path / "e", "--cache", no_cache, "--no-cache")
+    assert not no_cache.exists() or not list(no_cache.glob("prepared-*"))
+
+
 def test_pump_room_scan_at_its_scanner_covers_every_swept_direction(native, shared_data, tmp_path):
     """Baked at the scanner's own position, the directions the scanner swept have data.
 

@@ -91,7 +91,8 @@ def _prepared_source(spec: CloudSpec):
         if source is None:
             _prepared.clear()
             cloud, _records = _load_cloud(spec, list(spec.world_offset))
-            source = native.load().start_prepare_cloud_bake(cloud, dict(spec.settings)).run(None)
+            source = native.load().start_prepare_cloud_bake(cloud, dict(spec.settings),
+                                                            cache_dir=spec.cache_dir).run(None)
             _prepared[spec] = source
         return source
 

@@ -130,9 +130,12 @@ def bake_from_cloud(
     sources: Sequence[dict] = (),
     progress: Progress = None,
     start_only: bool = False,
+    cache_dir: str = "",
 ):
     """Bakes a probe set from a native PointCloud. With start_only, returns the running Job
-    (for Blender's modal operator) instead of waiting for the summary."""
+    (for Blender's modal operator) instead of waiting for the summary. cache_dir: the folder
+    whose prepared-cloud cache holds the cloud's normals, spacing and point hierarchy from an
+    earlier bake (read when there, written when not; "": computed, not cached)."""
     _native = native.load()
     placement.validate()
     where = dict(**placement.native_kwargs(), sources_json=json.dumps(list(sources)))
@@ -142,7 +145,8 @@ def bake_from_cloud(
                 "lod_texels": float(options.lod_texels),
                 "splat_edge_margin": float(options.splat_edge_margin),
                 "splat_core_scale": float(options.splat_core_scale), **options.plan}
-        job = _native.start_bake_planned_probe_set(cloud, out_dir, **where, options=plan)
+        job = _native.start_bake_planned_probe_set(cloud, out_dir, **where, options=plan,
+                                                   cache_dir=cache_dir or "")
         if start_only:
             return job
         summary = job.run(progress)
@@ -152,7 +156,7 @@ def bake_from_cloud(
                       normal_neighbours=int(options.normal_neighbours),
                       lod_texels=float(options.lod_texels),
                       splat_edge_margin=float(options.splat_edge_margin),
-                      splat_core_scale=float(options.splat_core_scale))
+                      splat_core_scale=float(options.splat_core_scale), cache_dir=cache_dir or "")
         if start_only:
             return _native.start_bake_probe_set(cloud, out_dir, **kwargs)
         summary = _native.bake_probe_set(cloud, out_dir, progress=progress, **kwargs)
@@ -184,7 +188,8 @@ def bake_from_scans(
     placement.validate()
     cloud, records = load_scans_and_sources(scan_paths, scanners, columns, cache_dir, progress=progress)
     sources = describe_records(records)
-    summary = bake_from_cloud(cloud, out_dir, placement, options, sources, progress)
+    summary = bake_from_cloud(cloud, out_dir, placement, options, sources, progress,
+                              cache_dir=default_cache_dir() if cache_dir is None else cache_dir)
     summary["points"] = len(cloud)
     summary["world_offset"] = list(cloud.world_offset)
     return summary

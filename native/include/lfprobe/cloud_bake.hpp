@@ -31,14 +31,20 @@ struct CloudBakeSource {
     PointHierarchy hierarchy;
     double normals_seconds = 0.0;
     double hierarchy_seconds = 0.0;
+    // True when the geometry and the hierarchy were read from the prepared-cloud cache
+    // (prepared_cloud_cache.hpp); normals_seconds is then the read.
+    bool from_cache = false;
 };
 
 // Estimates the cloud's local geometry and builds the hierarchy `settings` bake from, on all
-// cores; cancellable through `progress`. InputError for an empty cloud.
+// cores; cancellable through `progress`. InputError for an empty cloud. With a `cache_dir`,
+// both are read from the prepared-cloud cache there when it holds them for this cloud and
+// these options, and written to it otherwise (a cache that cannot be written is skipped).
 [[nodiscard]] CloudBakeSource prepare_cloud_bake(std::shared_ptr<const PointCloud> cloud,
                                                  const BakeSettings& settings,
                                                  const LocalGeometryOptions& geometry_options,
-                                                 Progress* progress = nullptr);
+                                                 Progress* progress = nullptr,
+                                                 const std::string& cache_dir = {});
 
 // The manifest of a cloud bake before its probes are listed: world offset, placement, the bake
 // settings and the sources as given.
@@ -60,10 +66,10 @@ struct CloudBakeSource {
 // Bakes every probe of `placement` from `cloud` into `folder` (created when missing), one probe
 // at a time so memory stays at one probe's maps, and writes the manifest last. `sources` goes
 // into the manifest as given. On cancellation or error no partial probe file is left behind.
-[[nodiscard]] BakeSummary
-bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,
-                          const BakeSettings& settings,
-                          const LocalGeometryOptions& geometry_options, const std::string& folder,
-                          const nlohmann::json& sources, Progress* progress = nullptr);
+// `cache_dir`: the prepared-cloud cache, as for prepare_cloud_bake.
+[[nodiscard]] BakeSummary bake_probe_set_from_cloud(
+    const PointCloud& cloud, const ProbePlacement& placement, const BakeSettings& settings,
+    const LocalGeometryOptions& geometry_options, const std::string& folder,
+    const nlohmann::json& sources, Progress* progress = nullptr, const std::string& cache_dir = {});
 
 } // namespace lfprobe

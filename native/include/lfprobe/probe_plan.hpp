@@ -16,6 +16,7 @@
 
 #include "lfprobe/local_geometry.hpp"
 #include "lfprobe/point_cloud.hpp"
+#include "lfprobe/point_hierarchy.hpp"
 #include "lfprobe/probe_bake.hpp"
 #include "lfprobe/probe_classification.hpp"
 #include "lfprobe/probe_placement.hpp"
@@ -70,11 +71,14 @@ struct ProbePlan {
                                     Progress* progress = nullptr);
 
 // Bakes the planned probes (each at its own position and resolution) into `folder` like
-// bake_probe_set_from_cloud; the plan goes into the manifest's bake settings.
+// bake_probe_set_from_cloud; the plan goes into the manifest's bake settings. `hierarchy`:
+// the cloud's point hierarchy for settings.bake when the caller has it (prepare_cloud_bake),
+// else it is built here.
 [[nodiscard]] BakeSummary
 bake_planned_probe_set(const PointCloud& cloud, const LocalGeometry& geometry,
                        const ProbePlacement& placement, const ProbePlan& plan,
                        const PlanSettings& settings, const std::string& folder,
-                       const nlohmann::json& sources, Progress* progress = nullptr);
+                       const nlohmann::json& sources, Progress* progress = nullptr,
+                       const PointHierarchy* hierarchy = nullptr);
 
 } // namespace lfprobe

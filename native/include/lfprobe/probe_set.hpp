@@ -70,8 +70,11 @@ struct BakeSummary {
     std::size_t probe_count = 0;
     double normals_seconds = 0.0;
     double hierarchy_seconds = 0.0; // building the point hierarchy, once per bake
-    double bake_seconds = 0.0;      // all probes, splatting and hole filling
-    double write_seconds = 0.0;     // EXR encoding and writing
+    // Normals, spacing and hierarchy read from the prepared-cloud cache (normals_seconds is
+    // then the read, hierarchy_seconds 0).
+    bool prepared_from_cache = false;
+    double bake_seconds = 0.0;  // all probes, splatting and hole filling
+    double write_seconds = 0.0; // EXR encoding and writing
     ProbeCoverage mean_coverage;
     std::size_t bytes_in_memory_per_probe = 0;
     std::size_t bytes_on_disk = 0;

@@ -288,7 +288,8 @@ class LFPROBE_OT_bake(GridJobOperator, bpy.types.Operator):
             cloud, sources = inputs.cloud_and_sources(result)
             self._step = "bake"
             return pipeline.bake_from_cloud(
-                cloud, self._staging, inputs.placement, inputs.options, sources, start_only=True
+                cloud, self._staging, inputs.placement, inputs.options, sources, start_only=True,
+                cache_dir=inputs.cache_dir,
             )
         # The jobs ran with start_only, which leaves the storage to the caller: recorded while
         # the set is still staged, so the folder never holds a set that loads otherwise.

@@ -82,7 +82,9 @@ def _print_bake_summary(args, summary: dict, source: str) -> int:
     size = "planned resolutions" if getattr(args, "auto", False) else f"{args.res}²"
     print(f"baked {n} probe(s) at {size} from {source} into {summary['folder']}")
     timing = []
-    if "normals_seconds" in summary:
+    if summary.get("prepared_from_cache"):
+        timing.append(f"normals and point hierarchy read from the cache {summary['normals_seconds']:.2f} s")
+    elif "normals_seconds" in summary:
         timing.append(f"normals {summary['normals_seconds']:.2f} s")
     if summary.get("hierarchy_seconds"):
         timing.append(f"point hierarchy {summary['hierarchy_seconds']:.2f} s")

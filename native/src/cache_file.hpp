@@ -1,0 +1,37 @@
+// Writing a cache entry (scan_cache.cpp, prepared_cloud_cache.cpp): every byte written or an
+// IoError, to a temporary that is removed unless the rename made it the entry, so an
+// interrupted or failed write never leaves a partial entry. Internal to the core.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <string>
+
+namespace lfprobe::cache_file {
+
+// Writes all of `size` bytes to `fd` or throws IoError naming `name`.
+void write_all(int fd, const void* data, std::size_t size, const std::string& name);
+
+// A temporary beside `entry` (ENTRY.tmp.PID.N), removed on destruction unless committed.
+class TemporaryFile {
+public:
+    explicit TemporaryFile(const std::filesystem::path& entry);
+    ~TemporaryFile();
+    TemporaryFile(const TemporaryFile&) = delete;
+    TemporaryFile& operator=(const TemporaryFile&) = delete;
+    [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+    // Renames the temporary to `entry`; from then on it is no longer removed.
+    void commit_as(const std::filesystem::path& entry);
+
+private:
+    std::filesystem::path path_;
+    bool committed_ = false;
+};
+
+// Creates `path` for writing (it must not exist); throws IoError.
+[[nodiscard]] int create_for_writing(const std::string& path);
+
+// Closes `fd`, throwing IoError when the data could not be written.
+void close_written(int fd, const std::string& name);
+
+} // namespace lfprobe::cache_file
