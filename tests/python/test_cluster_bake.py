@@ -71,6 +71,18 @@ def test_two_workers_bake_the_local_set_bit_for_bit(scan, local_set, tmp_path):
     assert code == 0
     assert_same_set(local_set, str(out))
     assert leftovers(tmp_path) == []
+    # The client prepared the cloud into the cache; the workers read it instead of computing.
+    assert len(list((tmp_path / "cache").glob("prepared-*.lfpprep"))) == 1
+
+
+def test_workers_read_the_cloud_the_client_prepared(scan, tmp_path, local_cluster):
+    cluster, _client = local_cluster
+    summary = cluster_bake.bake_scans_on_cluster(
+        [scan], str(tmp_path / "set"), ProbePlacementSpec(**GRID), BakeOptions(resolution=64),
+        cache_dir=str(tmp_path / "cache"), scheduler=cluster.scheduler_address, probes_per_task=3)
+    figures = summary["cluster"]
+    assert figures["workers_reading_the_prepared_cloud"] == figures["workers_used"] >= 1
+    assert summary["hierarchy_seconds"] == 0.0
 
 
 def test_a_worker_killed_mid_bake_still_gives_the_identical_set(scan, local_set, tmp_path, local_cluster):
@@ -78,8 +90,9 @@ def test_a_worker_killed_mid_bake_still_gives_the_identical_set(scan, local_set,
     killed = {}
 
     def kill_a_busy_worker(fraction, stage):
-        # The first tasks spend about half a second reading the cloud and estimating normals:
-        # kill the process of a worker that holds a task then.
+        # Without a cache the first tasks spend about half a second parsing the scan and
+        # estimating normals (with one, the client prepares the cloud and the workers only read
+        # it, too quickly to be caught): kill the process of a worker that holds a task then.
         if not killed:
             for address, tasks in client.processing().items():
                 if tasks:
@@ -92,7 +105,7 @@ def test_a_worker_killed_mid_bake_still_gives_the_identical_set(scan, local_set,
     out = tmp_path / "set"
     summary = cluster_bake.bake_scans_on_cluster(
         [scan], str(out), ProbePlacementSpec(**GRID), BakeOptions(resolution=128),
-        cache_dir=str(tmp_path / "cache"), scheduler=cluster.scheduler_address, probes_per_task=3,
+        cache_dir="", scheduler=cluster.scheduler_address, probes_per_task=3,
         progress=kill_a_busy_worker)
     assert killed, "no worker was busy to be killed"
     assert summary["probe_count"] == 6

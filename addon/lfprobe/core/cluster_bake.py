@@ -116,6 +116,7 @@ def bake_probe_batch(spec_fields: dict, positions: list, indices: list, staging:
         "prepare_seconds": (prepared - started) if fresh else 0.0,
         "normals_seconds": source.normals_seconds if fresh else 0.0,
         "hierarchy_seconds": source.hierarchy_seconds if fresh else 0.0,
+        "prepared_from_cache": bool(source.from_cache),
         "bake_seconds": time.perf_counter() - prepared,
         "bytes_read": _bytes_read(spec) if fresh else 0,
         "peak_memory_bytes": _peak_memory_bytes(),
@@ -246,14 +247,21 @@ def bake_scans_on_cluster(
                                            sources_json=json.dumps(list(describe_records(records))),
                                            settings=settings)
         points = len(cloud)
-        del cloud  # the workers load their own; the client keeps no cloud during the bake
         load_seconds = time.perf_counter() - started
+        prepare_started = time.perf_counter()
+        if spec.cache_dir:
+            # Prepared once here into the shared cache, the cloud's normals, spacing and
+            # hierarchy are read by every worker instead of computed by each.
+            _native.start_prepare_cloud_bake(cloud, settings, cache_dir=spec.cache_dir).run(progress)
+        prepare_seconds = time.perf_counter() - prepare_started
+        del cloud  # the workers load their own; the client keeps no cloud during the bake
         summary = _run_tasks(cluster, out_dir, spec, plan, probes_per_task, progress)
     finally:
         cluster.close()
     summary["points"] = points
     summary["world_offset"] = list(spec.world_offset)
     summary["cluster"]["client_load_seconds"] = load_seconds
+    summary["cluster"]["client_prepare_seconds"] = prepare_seconds
     summary["cluster"]["wall_seconds"] = time.perf_counter() - started
     apply_storage(out_dir, summary, options)
     return summary
@@ -362,6 +370,9 @@ def _figures(results: list, probes: int, tasks: int, tasks_seconds: float, clust
             "probes_per_second": probes / tasks_seconds if tasks_seconds > 0 else 0.0,
             "seconds_per_probe": bake / probes if probes else 0.0,
             "prepare_seconds_per_worker": (sum(prepare) / len(prepare)) if prepare else 0.0,
+            # Workers whose cloud came ready from the prepared-cloud cache (the client's).
+            "workers_reading_the_prepared_cloud": len({r["worker_pid"] for r in results
+                                                       if r["prepared_from_cache"]}),
             "bytes_read_per_worker": max([r["bytes_read"] for r in results] or [0]),
             "peak_memory_per_worker": max([r["peak_memory_bytes"] for r in results] or [0]),
             "base_memory_per_worker": max([r["base_memory_bytes"] for r in results] or [0]),

@@ -96,7 +96,9 @@ def _print_bake_summary(args, summary: dict, source: str) -> int:
         c = summary["cluster"]
         print(f"  cluster: {c['workers']} worker(s), {c['tasks']} task(s) in {c['tasks_seconds']:.2f} s, "
               f"{c['probes_per_second']:.2f} probes/s; each worker read {_mib(c['bytes_read_per_worker'])} "
-              f"and prepared the cloud in {c['prepare_seconds_per_worker']:.2f} s, peak memory "
+              f"and made the cloud ready in {c['prepare_seconds_per_worker']:.2f} s "
+              f"({c.get('workers_reading_the_prepared_cloud', 0)} read what the client prepared in "
+              f"{c.get('client_prepare_seconds', 0.0):.2f} s), peak memory "
               f"{_mib(c['peak_memory_per_worker'])}; "
               f"scheduler overhead {1000 * c['overhead_seconds_per_task']:.1f} ms/task")
     print(
