@@ -158,6 +158,56 @@ struct ChannelLayout {
     return c == ' ' || c == '\t' || c == ',' || c == '\r';
 }
 
+// The plain decimals scanners write ([-]digits[.digits], no exponent), parsed the fast way
+// (Clinger's): the digits as an integer m and the decimals k; where m < 2^53 and k <= 22 both
+// are exact doubles and m / 10^k is one correctly rounded division, so the value is the
+// correctly rounded one, bit for bit what fast_float returns. Half the parse time of a scan
+// went to fast_float's general path. Returns the number's end, or nullptr for anything else
+// (an exponent, more digits, no digit before or after the point): fast_float parses those.
+[[nodiscard]] inline const char* parse_plain_decimal(const char* first, const char* last,
+                                                     double& value) {
+    static constexpr std::array<double, 23> kPowersOfTen{
+        1e0,  1e1,  1e2,  1e3,  1e4,  1e5,  1e6,  1e7,  1e8,  1e9,  1e10, 1e11,
+        1e12, 1e13, 1e14, 1e15, 1e16, 1e17, 1e18, 1e19, 1e20, 1e21, 1e22};
+    const char* p = first;
+    const bool negative = p < last && *p == '-';
+    p += negative ? 1 : 0;
+    std::uint64_t digits = 0;
+    int count = 0;
+    const char* integer = p;
+    while (p < last && static_cast<unsigned>(*p - '0') < 10u && count < 20) {
+        digits = digits * 10 + static_cast<unsigned>(*p - '0');
+        ++p;
+        ++count;
+    }
+    if (p == integer) {
+        return nullptr;
+    }
+    int decimals = 0;
+    if (p < last && *p == '.') {
+        const char* fraction = ++p;
+        while (p < last && static_cast<unsigned>(*p - '0') < 10u && count < 20) {
+            digits = digits * 10 + static_cast<unsigned>(*p - '0');
+            ++p;
+            ++count;
+        }
+        decimals = static_cast<int>(p - fraction);
+        if (decimals == 0) {
+            return nullptr;
+        }
+    }
+    constexpr std::uint64_t kExactInteger = std::uint64_t{1} << 53;
+    if (count >= 20 || digits > kExactInteger || decimals > 22 ||
+        (p < last && (*p == 'e' || *p == 'E' || static_cast<unsigned>(*p - '0') < 10u))) {
+        return nullptr;
+    }
+    const double magnitude = decimals == 0 ? static_cast<double>(digits)
+                                           : static_cast<double>(digits) /
+                                                 kPowersOfTen[static_cast<std::size_t>(decimals)];
+    value = negative ? -magnitude : magnitude;
+    return p;
+}
+
 // Parses a double at [first, last). fast_float rejects a leading '+', which some exporters
 // write, so it is skipped here. Returns the end of the number, or nullptr when there is none.
 // Overflowing values come back as infinities: callers check finiteness.
@@ -166,6 +216,9 @@ struct ChannelLayout {
     if (start < last && *start == '+' && start + 1 < last && *(start + 1) != '-' &&
         *(start + 1) != '+') {
         ++start;
+    }
+    if (const char* end = parse_plain_decimal(start, last, value)) {
+        return end;
     }
     const fast_float::from_chars_result result = fast_float::from_chars(start, last, value);
     if (result.ec == std::errc::invalid_argument || result.ptr == start) {
