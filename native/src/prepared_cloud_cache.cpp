@@ -112,7 +112,9 @@ public:
         }
         out.resize(static_cast<std::size_t>(count));
         const std::size_t size = out.size() * sizeof(T);
-        std::memcpy(out.data(), p_, size);
+        if (size > 0) { // an empty vector's data() may be null, which memcpy must not get
+            std::memcpy(out.data(), p_, size);
+        }
         p_ += size;
         left_ -= size;
         return true;

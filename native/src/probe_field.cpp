@@ -79,14 +79,20 @@ struct FieldQuery {
             keep_fallback(index, r);
             return false;
         }
-        result.status = r.status;
-        result.t = r.t;
-        result.free_until = r.free_until;
+        answer(index, r, r.status, r.t, r.free_until, r.texel);
+        return true;
+    }
+
+    // Probe `index`'s answer, its colour and normal from `r`, as the field's.
+    void answer(std::size_t index, const ProbeTraceResult& r, TraceStatus status, double t,
+                double free_until, oct::Texel texel) {
+        result.status = status;
+        result.t = t;
+        result.free_until = free_until;
         result.radiance = r.radiance;
         result.normal = r.normal;
         result.probe = static_cast<int>(index);
-        result.texel = r.texel;
-        return true;
+        result.texel = texel;
     }
 
     // A probe's fallback meeting (ProbeTraceResult::has_fallback): the nearest along the ray
@@ -110,13 +116,8 @@ struct FieldQuery {
         if (!fallback.has_fallback) {
             return;
         }
-        result.status = TraceStatus::Hit;
-        result.t = fallback.t_fallback;
-        result.free_until = fallback.t_fallback;
-        result.radiance = fallback.radiance;
-        result.normal = fallback.normal;
-        result.probe = static_cast<int>(fallback_probe);
-        result.texel = fallback.fallback_texel;
+        answer(fallback_probe, fallback, TraceStatus::Hit, fallback.t_fallback, fallback.t_fallback,
+               fallback.fallback_texel);
     }
 
     ProbeTraceResult fallback;
