@@ -8,7 +8,7 @@
 # --seconds N: each harness runs N seconds (default 60); --runs N: N executions each instead.
 # --jobs J: J harnesses at a time (default 1). --fresh-corpus: start from the seeds in a
 # temporary corpus, leaving build-fuzz/corpus as it is (the test suite's short runs).
-# HARNESS: text_scan, ply, obj_mtl, camera, manifest, scan_cache (default: all).
+# HARNESS: text_scan, ply, obj_mtl, camera, manifest, scan_cache, prepared_cloud (default: all).
 # A crash stops its harness and leaves the input in build-fuzz/crashes/; the command then exits 1.
 # Each run's figures are printed and appended to build-fuzz/fuzz_runs.csv, whose totals per
 # harness are printed at the end.
@@ -32,7 +32,7 @@ while [ $# -gt 0 ]; do
     *) harnesses+=("$1"); shift ;;
   esac
 done
-all=(text_scan ply obj_mtl camera manifest scan_cache)
+all=(text_scan ply obj_mtl camera manifest scan_cache prepared_cloud)
 [ ${#harnesses[@]} -gt 0 ] || harnesses=("${all[@]}")
 for h in "${harnesses[@]}"; do
   [ -f "tests/fuzz/${h}_fuzzer.cpp" ] || { echo "tools/fuzz.sh: no harness $h (tests/fuzz/${h}_fuzzer.cpp)" >&2; exit 2; }

@@ -169,6 +169,25 @@ def seeds(shared: str) -> dict[str, list[bytes]]:
     )
     structured = b"\x01" + struct.pack("<QI", 4, 1) + struct.pack("<6d", 0, 0, 0, 0, 0, 0) + arrays
     out["scan_cache_fuzzer"] = [structured, b"\x00LFPCACHE\x02\x00\x00\x00", b"\x01" + struct.pack("<QI", 0, 0)]
+
+    # Prepared-cloud payloads in the harness's structured form (odd first byte) for its cloud of
+    # 800 points: the geometry's arrays, then the hierarchy: none, or one level of one cell.
+    n = 800
+
+    def array(fmt, values):
+        return struct.pack("<Q", len(values)) + b"".join(struct.pack("<" + fmt, *v) for v in values)
+
+    geometry = (array("fff", [(0.0, 0.0, 1.0)] * n) + array("f", [(0.05,)] * n) + array("B", [(1,)] * n)
+                + array("bbbB", []) + array("I", [(i,) for i in range(n)]))
+    head = struct.pack("<ff", 0.0, 0.0) + struct.pack("<fff", 0.0, 0.0, 0.0) + struct.pack("<f", 2.0)
+    order = array("I", [(i,) for i in range(n)])
+    surfel = struct.pack("<ffffffffffIBB", 0.5, 0.5, 0.5, 0.0, 0.0, 1.0, 0.5, 0.5, 0.5, 0.1, n, 4, 1)
+    one_level = (struct.pack("<Q", 1) + struct.pack("<if", 0, 0.1) + array("Q", [(0,)])
+                 + array("I", [(0,), (n,)]) + array("I", []) + array("I", [(0,), (1,)])
+                 + struct.pack("<Q", 1) + surfel)
+    out["prepared_cloud_fuzzer"] = [b"\x01" + geometry + head + order + struct.pack("<Q", 0),
+                                    b"\x01" + geometry + head + order + one_level,
+                                    b"\x00LFPPREP1\x01\x00\x00\x00"]
     return out
 
 

@@ -5,12 +5,15 @@
 #include "lfprobe/prepared_cloud_cache.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <vector>
 
 #include <unistd.h>
+
+#include <glm/geometric.hpp>
 
 #include "cache_file.hpp"
 #include "lfprobe/error.hpp"
@@ -172,26 +175,52 @@ bool all_below(const std::vector<std::uint32_t>& indices, std::size_t limit) {
     return std::all_of(indices.begin(), indices.end(), [&](std::uint32_t i) { return i < limit; });
 }
 
-// What the bake relies on of a geometry and a hierarchy it did not compute itself.
+bool finite(const glm::vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+// What the computation gives: finite unit-or-zero normals, finite spacings of 0 or more.
+bool plausible(const std::vector<glm::vec3>& normals, const std::vector<float>& spacing) {
+    return std::all_of(normals.begin(), normals.end(),
+                       [](const glm::vec3& v) { return finite(v) && glm::dot(v, v) <= 1.01f; }) &&
+           std::all_of(spacing.begin(), spacing.end(),
+                       [](float s) { return std::isfinite(s) && s >= 0.0f; });
+}
+
+bool plausible(const std::vector<CellSurfel>& surfels) {
+    return std::all_of(surfels.begin(), surfels.end(), [](const CellSurfel& s) {
+        return finite(s.position) && finite(s.normal) && glm::dot(s.normal, s.normal) <= 1.01f &&
+               finite(s.colour) && std::isfinite(s.spacing) && s.spacing >= 0.0f && s.facing <= 6 &&
+               s.oriented <= 1;
+    });
+}
+
+// What the bake relies on of a geometry and a hierarchy it did not compute itself: the
+// checksum proves an entry is what was written, these that a writer other than this one (or
+// a faulty one) cannot make the bake read out of bounds or convert non-finite values.
 bool consistent(const PreparedCloud& p, std::size_t n) {
     const LocalGeometry& g = p.geometry;
     if (g.normals.size() != n || g.spacing.size() != n || g.oriented.size() != n ||
         (!g.edges.empty() && g.edges.size() != n) || g.spatial_order.size() != n ||
-        !all_below(g.spatial_order, n)) {
+        !all_below(g.spatial_order, n) || !plausible(g.normals, g.spacing)) {
         return false;
     }
     const PointHierarchy& h = p.hierarchy;
     if (h.levels.empty()) {
-        return true;
+        return h.order.empty() || (h.order.size() == n && all_below(h.order, n));
     }
-    if (h.order.size() != n || !all_below(h.order, n)) {
+    if (h.order.size() != n || !all_below(h.order, n) || !finite(h.origin) ||
+        !(std::isfinite(h.cube_size) && h.cube_size > 0.0f) ||
+        !(std::isfinite(h.intensity.min) && std::isfinite(h.intensity.scale))) {
         return false;
     }
     for (std::size_t l = 0; l < h.levels.size(); ++l) {
         const PointHierarchy::Level& level = h.levels[l];
         const std::size_t cells = level.cell_count();
         if (!valid_runs(level.first_point, cells, n, false) ||
-            !valid_runs(level.first_surfel, cells, level.surfels.size(), true)) {
+            !valid_runs(level.first_surfel, cells, level.surfels.size(), true) ||
+            !(std::isfinite(level.cell_size) && level.cell_size > 0.0f) || level.shift < 0 ||
+            level.shift > 63 || !plausible(level.surfels)) {
             return false;
         }
         if (l == 0 ? !level.first_child.empty()
