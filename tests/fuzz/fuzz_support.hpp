@@ -73,6 +73,22 @@ inline std::pair<std::string_view, std::string_view> split_at(std::string_view b
     return {bytes.substr(0, at), bytes.substr(at + separator.size())};
 }
 
+// The cache harnesses' input, written over the cache entry at `entry_path`: with the first
+// byte odd the rest goes through `structured` (which gives it a header whose checksum matches),
+// else the rest is the entry as it is. False for an empty input.
+template <class Structured>
+bool write_cache_entry(const std::uint8_t* data, std::size_t size, const std::string& entry_path,
+                       Structured&& structured) {
+    if (size == 0) {
+        return false;
+    }
+    const std::string_view rest(reinterpret_cast<const char*>(data) + 1, size - 1);
+    const std::string entry = (data[0] & 1) != 0 ? structured(rest) : std::string(rest);
+    std::ofstream out(entry_path, std::ios::binary | std::ios::trunc);
+    out.write(entry.data(), static_cast<std::streamsize>(entry.size()));
+    return true;
+}
+
 // A broken promise of the code under test: print it and abort, which libFuzzer reports as a
 // crash and saves the input for.
 [[noreturn]] inline void broken_promise(const char* what) {

@@ -79,15 +79,9 @@ std::string structured_entry(std::string_view input) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     using namespace lfprobe;
-    if (size == 0) {
-        return 0;
-    }
     const Genuine& g = genuine();
-    const std::string_view rest(reinterpret_cast<const char*>(data) + 1, size - 1);
-    const std::string entry = (data[0] & 1) != 0 ? structured_entry(rest) : std::string(rest);
-    {
-        std::ofstream out(g.entry_path, std::ios::binary | std::ios::trunc);
-        out.write(entry.data(), static_cast<std::streamsize>(entry.size()));
+    if (!fuzz::write_cache_entry(data, size, g.entry_path, structured_entry)) {
+        return 0;
     }
     try {
         bool hit = false;
