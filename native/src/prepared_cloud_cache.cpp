@@ -130,16 +130,21 @@ private:
     std::size_t left_;
 };
 
+// Calls `field` on each of a surfel's fields in the entry's order, while it returns true: the
+// writer and the reader walk the same list.
+template <class Surfel, class Field>
+bool each_surfel_field(Surfel& s, Field&& field) {
+    return field(s.position) && field(s.normal) && field(s.colour) && field(s.spacing) &&
+           field(s.count) && field(s.facing) && field(s.oriented);
+}
+
 void write_surfels(EntryWriter& w, const std::vector<CellSurfel>& surfels) {
     w.value(static_cast<std::uint64_t>(surfels.size()));
     for (const CellSurfel& s : surfels) {
-        w.value(s.position);
-        w.value(s.normal);
-        w.value(s.colour);
-        w.value(s.spacing);
-        w.value(s.count);
-        w.value(s.facing);
-        w.value(s.oriented);
+        each_surfel_field(s, [&](const auto& v) {
+            w.value(v);
+            return true;
+        });
     }
 }
 
@@ -150,13 +155,9 @@ bool read_surfels(EntryReader& r, std::vector<CellSurfel>& surfels) {
         return false;
     }
     surfels.resize(static_cast<std::size_t>(count));
-    for (CellSurfel& s : surfels) {
-        if (!(r.value(s.position) && r.value(s.normal) && r.value(s.colour) && r.value(s.spacing) &&
-              r.value(s.count) && r.value(s.facing) && r.value(s.oriented))) {
-            return false;
-        }
-    }
-    return true;
+    return std::all_of(surfels.begin(), surfels.end(), [&](CellSurfel& s) {
+        return each_surfel_field(s, [&](auto& v) { return r.value(v); });
+    });
 }
 
 // Runs of `runs` (entries + 1 offsets) that are nondecreasing and end within `limit`.

@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <map>
 #include <string>
 #include <string_view>
@@ -61,6 +62,12 @@ inline std::string write_scratch_file(const std::string& name, std::string_view 
         std::abort();
     }
     return path.string();
+}
+
+// The whole of the file at `path` (empty when it cannot be read).
+inline std::string file_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 // Splits `bytes` at the first `separator`: the part before it, and the rest (empty when absent).

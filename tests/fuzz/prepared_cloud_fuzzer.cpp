@@ -65,8 +65,7 @@ const Genuine& genuine() {
         fuzz::expect(!first.hierarchy.levels.empty(), "the genuine cloud has no hierarchy");
         made.key = prepared_cloud_key(*made.cloud, {}, true);
         made.entry_path = prepared_cloud_entry_path(made.key, made.cache_dir);
-        std::ifstream in(made.entry_path, std::ios::binary);
-        made.entry.assign(std::istreambuf_iterator<char>(in), {});
+        made.entry = fuzz::file_bytes(made.entry_path);
         fuzz::expect(made.entry.size() > kHeaderBytes, "the genuine entry was not written");
         return made;
     }();

@@ -45,8 +45,7 @@ const Genuine& genuine() {
         const ScanFile first = read_scan_file_cached(made.scan_path, {}, made.cache_dir);
         (void)first;
         made.entry_path = scan_cache_entry_path(made.scan_path, {}, made.cache_dir);
-        std::ifstream in(made.entry_path, std::ios::binary);
-        made.entry.assign(std::istreambuf_iterator<char>(in), {});
+        made.entry = fuzz::file_bytes(made.entry_path);
         fuzz::expect(made.entry.size() > kHeaderBytes, "the genuine cache entry was not written");
         return made;
     }();

@@ -27,6 +27,17 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
+// The empty box room's exact probe at (0, 0, 1), n² texels, with its coarse levels: what many
+// tests below trace against.
+struct EmptyRoomProbe {
+    BoxRoomScene scene = scenes::empty_box_room();
+    glm::dvec3 centre{0.0, 0.0, 1.0};
+    ProbeMap map;
+    MinDistancePyramid levels;
+    explicit EmptyRoomProbe(int n)
+        : map(scenes::analytic_probe(scene, centre, n)), levels(map.distance, n) {}
+};
+
 // The exact distance along a ray given in the probe's frame.
 double true_depth(const BoxRoomScene& scene, const glm::dvec3& centre, const Ray& ray) {
     return static_cast<double>(
@@ -302,11 +313,11 @@ TEST(Trace, DirectionsAtTheMapEdgesAndStraightDown) {
 }
 
 TEST(Trace, GrazingSurfacesAreHitNotLost) {
-    const BoxRoomScene scene = scenes::empty_box_room();
-    const glm::dvec3 centre(0.0, 0.0, 1.0);
-    const int n = 256;
-    const ProbeMap map = scenes::analytic_probe(scene, centre, n);
-    const MinDistancePyramid levels(map.distance, n);
+    const EmptyRoomProbe probe(256);
+    const BoxRoomScene& scene = probe.scene;
+    const glm::dvec3& centre = probe.centre;
+    const ProbeMap& map = probe.map;
+    const MinDistancePyramid& levels = probe.levels;
     Figures f;
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> angle(0.5, 8.0); // degrees above the floor
@@ -434,11 +445,9 @@ TEST(Trace, ARayTwoCentimetresBehindASurfaceDoesNotMeetIt) {
     // asked), not meet it and show the object where what lies behind belongs. At 1024² the
     // default tolerance is 1 cm plus a texel footprint (7 mm at the wall's 2 m); the 2 cm of
     // the earlier default met it (the wrong-surface pixels along the lab room's silhouettes).
-    const BoxRoomScene scene = scenes::empty_box_room();
-    const glm::dvec3 centre(0.0, 0.0, 1.0);
-    const int n = 1024;
-    const ProbeMap map = scenes::analytic_probe(scene, centre, n);
-    const MinDistancePyramid levels(map.distance, n);
+    const EmptyRoomProbe probe(1024);
+    const ProbeMap& map = probe.map;
+    const MinDistancePyramid& levels = probe.levels;
     const Ray behind = probe_ray({2.02, 0.1, 0.1}, {0.0, 1.0, 0.05}, 0.0, 0.3);
     const ProbeTraceResult unknown = trace_probe(map, &levels, behind);
     EXPECT_EQ(unknown.status, TraceStatus::Unknown);
