@@ -4,7 +4,9 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -316,43 +318,153 @@ float box_distance(const glm::vec3& p, const glm::vec3& lo, float size) {
     return glm::length(d);
 }
 
-void collect(const PointHierarchy& h, std::size_t level_index, std::size_t cell,
+// Cell `cell`'s run in `runs` (cells + 1 offsets), checked to lie within [0, limit].
+std::pair<std::uint32_t, std::uint32_t>
+run_of(std::span<const std::uint32_t> runs, std::size_t cell, std::size_t limit, const char* what) {
+    const std::uint32_t first = runs[cell];
+    const std::uint32_t last = runs[cell + 1];
+    if (first > last || last > limit) {
+        throw IoError(std::string("point hierarchy: a cell's run of ") + what +
+                      " lies outside its array (the hierarchy's file is damaged)");
+    }
+    return {first, last};
+}
+
+void collect(const PointHierarchyView& h, std::size_t level_index, std::size_t cell,
              const glm::vec3& centre, float reach, HierarchyCut& out) {
-    const PointHierarchy::Level& level = h.levels[level_index];
+    const PointHierarchyView::Level& level = h.levels[level_index];
     const glm::u64vec3 c = morton::cell(level.cell_keys[cell]);
     const glm::vec3 lo = h.origin + glm::vec3(c) * level.cell_size;
     const float d = box_distance(centre, lo, level.cell_size);
     // One surfel per facing and cell: at most lod_texels texels apart at d? And worth it: a
     // cell whose surfels stand for hardly more points than they are (a sparse cloud) would
     // only blur them (its surfels splat wider than its points), so its points are taken.
-    const std::uint32_t points = level.first_point[cell + 1] - level.first_point[cell];
-    const std::uint32_t surfels = level.first_surfel[cell + 1] - level.first_surfel[cell];
+    const auto [first_point, last_point] = run_of(level.first_point, cell, h.point_count, "points");
+    const auto [first_surfel, last_surfel] =
+        run_of(level.first_surfel, cell, level.surfel_count, "surfels");
+    const std::uint32_t points = last_point - first_point;
+    const std::uint32_t surfels = last_surfel - first_surfel;
+    if (surfels > kFacings) {
+        throw IoError("point hierarchy: a cell holds more surfels than facings (the hierarchy's "
+                      "file is damaged)");
+    }
     if (level.cell_size <= reach * d && points >= kMinPointsPerSurfel * surfels) {
-        out.surfels.insert(out.surfels.end(), level.surfels.begin() + level.first_surfel[cell],
-                           level.surfels.begin() + level.first_surfel[cell + 1]);
+        const std::size_t at = out.surfels.size();
+        out.surfels.resize(at + surfels);
+        if (surfels > 0) {
+            std::memcpy(static_cast<void*>(out.surfels.data() + at),
+                        level.surfels + std::size_t{first_surfel} * sizeof(CellSurfel),
+                        std::size_t{surfels} * sizeof(CellSurfel));
+        }
         return;
     }
     if (level_index == 0) {
-        out.points.insert(out.points.end(), h.order.begin() + level.first_point[cell],
-                          h.order.begin() + level.first_point[cell + 1]);
+        if (h.order.empty()) {
+            for (std::uint32_t k = first_point; k < last_point; ++k) {
+                out.points.push_back(k);
+            }
+        } else {
+            out.points.insert(out.points.end(), h.order.begin() + first_point,
+                              h.order.begin() + last_point);
+        }
         return;
     }
-    for (std::uint32_t child = level.first_child[cell]; child < level.first_child[cell + 1];
-         ++child) {
+    const PointHierarchyView::Level& below = h.levels[level_index - 1];
+    const auto [first_child, last_child] =
+        run_of(level.first_child, cell, below.cell_count(), "children");
+    // What a built hierarchy always is, checked because a mapped file's runs are read here
+    // without having been checked whole: a cell's children are its own (their keys lie in its
+    // key's eighth, in order) and their points tile its points. So no cell is visited twice
+    // and no point is taken twice, however the file was damaged.
+    std::uint32_t next_point = first_point;
+    for (std::uint32_t child = first_child; child < last_child; ++child) {
+        const std::uint64_t key = below.cell_keys[child];
+        const auto [child_first, child_last] =
+            run_of(below.first_point, child, h.point_count, "points");
+        if ((key >> 3) != level.cell_keys[cell] ||
+            (child > first_child && key <= below.cell_keys[child - 1]) ||
+            child_first != next_point) {
+            throw IoError("point hierarchy: a cell's children are not its own (the hierarchy's "
+                          "file is damaged)");
+        }
+        next_point = child_last;
+    }
+    if (next_point != last_point) {
+        throw IoError("point hierarchy: a cell's children do not hold its points (the "
+                      "hierarchy's file is damaged)");
+    }
+    for (std::uint32_t child = first_child; child < last_child; ++child) {
         collect(h, level_index - 1, child, centre, reach, out);
     }
 }
 
 } // namespace
 
+PointHierarchyView PointHierarchyView::of(const PointHierarchy& hierarchy) {
+    PointHierarchyView v;
+    v.origin = hierarchy.origin;
+    v.cube_size = hierarchy.cube_size;
+    v.point_count = hierarchy.order.size();
+    v.order = hierarchy.order;
+    for (const PointHierarchy::Level& level : hierarchy.levels) {
+        Level l;
+        l.shift = level.shift;
+        l.cell_size = level.cell_size;
+        l.cell_keys = level.cell_keys;
+        l.first_point = level.first_point;
+        l.first_child = level.first_child;
+        l.first_surfel = level.first_surfel;
+        l.surfels = reinterpret_cast<const std::byte*>(level.surfels.data());
+        l.surfel_count = level.surfels.size();
+        v.levels.push_back(l);
+    }
+    return v;
+}
+
 HierarchyCut cut_for_probe(const PointHierarchy& hierarchy, const glm::dvec3& centre,
                            float texel_angle, float lod_texels, Progress* progress) {
-    HierarchyCut cut;
     if (hierarchy.levels.empty() || !(lod_texels > 0.0f)) {
+        HierarchyCut cut;
         cut.points = hierarchy.order;
         return cut;
     }
-    const PointHierarchy::Level& top = hierarchy.levels.back();
+    return cut_for_probe(PointHierarchyView::of(hierarchy), centre, texel_angle, lod_texels,
+                         progress);
+}
+
+HierarchyCut cut_for_probe(const PointHierarchyView& hierarchy, const glm::dvec3& centre,
+                           float texel_angle, float lod_texels, Progress* progress) {
+    HierarchyCut cut;
+    if (hierarchy.levels.empty() || !(lod_texels > 0.0f)) {
+        if (hierarchy.order.empty()) {
+            cut.points.resize(hierarchy.point_count);
+            for (std::size_t k = 0; k < cut.points.size(); ++k) {
+                cut.points[k] = static_cast<std::uint32_t>(k);
+            }
+        } else {
+            cut.points.assign(hierarchy.order.begin(), hierarchy.order.end());
+        }
+        return cut;
+    }
+    if (!hierarchy.order.empty() && hierarchy.order.size() != hierarchy.point_count) {
+        throw IoError("point hierarchy: its order does not hold every point");
+    }
+    for (std::size_t l = 0; l < hierarchy.levels.size(); ++l) {
+        const PointHierarchyView::Level& level = hierarchy.levels[l];
+        const std::size_t runs = level.cell_count() + 1;
+        if (level.first_point.size() != runs || level.first_surfel.size() != runs ||
+            level.first_child.size() != (l == 0 ? 0 : runs)) {
+            throw IoError("point hierarchy: a level's runs do not match its cells (the "
+                          "hierarchy's file is damaged)");
+        }
+    }
+    const PointHierarchyView::Level& top = hierarchy.levels.back();
+    for (std::size_t cell = 1; cell < top.cell_count(); ++cell) {
+        if (top.cell_keys[cell] <= top.cell_keys[cell - 1]) {
+            throw IoError("point hierarchy: the top level's cells are out of order (the "
+                          "hierarchy's file is damaged)");
+        }
+    }
     const glm::vec3 c(centre);
     const float reach = lod_texels * texel_angle;
     std::vector<HierarchyCut> parts(top.cell_count());

@@ -15,7 +15,9 @@
 // themselves where even the finest cell is too coarse (near the probe).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -67,6 +69,32 @@ struct PointHierarchy {
     [[nodiscard]] std::size_t surfel_count() const;
 };
 
+// A hierarchy's arrays seen without owning them: a PointHierarchy's vectors, or the sections of
+// a memory-mapped file (spatial_cloud.hpp), which a cut then reads only where it descends.
+struct PointHierarchyView {
+    struct Level {
+        int shift = 0;
+        float cell_size = 0.0f;
+        std::span<const std::uint64_t> cell_keys;
+        std::span<const std::uint32_t> first_point;
+        std::span<const std::uint32_t> first_child;
+        std::span<const std::uint32_t> first_surfel;
+        // CellSurfel records, read with memcpy: a mapped file's bytes are not objects.
+        const std::byte* surfels = nullptr;
+        std::size_t surfel_count = 0;
+        [[nodiscard]] std::size_t cell_count() const { return cell_keys.size(); }
+    };
+    glm::vec3 origin{0.0f};
+    float cube_size = 0.0f;
+    std::size_t point_count = 0;
+    // Point indices in Morton order; empty when the points themselves are stored in that order
+    // (a cut's points are then their positions along the curve).
+    std::span<const std::uint32_t> order;
+    std::vector<Level> levels; // finest first
+
+    [[nodiscard]] static PointHierarchyView of(const PointHierarchy& hierarchy);
+};
+
 // Builds the hierarchy for `cloud` with the normals and spacing of `geometry` (from
 // estimate_local_geometry on the same cloud). Deterministic: the same cloud gives the same
 // hierarchy bit for bit, for any thread count. Runs on all cores; cancellable.
@@ -88,5 +116,10 @@ struct HierarchyCut {
 [[nodiscard]] HierarchyCut cut_for_probe(const PointHierarchy& hierarchy, const glm::dvec3& centre,
                                          float texel_angle, float lod_texels,
                                          Progress* progress = nullptr);
+// The same cut over a view. Every run a visited cell names is checked against its array, so a
+// damaged mapped file gives IoError, never a read out of bounds.
+[[nodiscard]] HierarchyCut cut_for_probe(const PointHierarchyView& hierarchy,
+                                         const glm::dvec3& centre, float texel_angle,
+                                         float lod_texels, Progress* progress = nullptr);
 
 } // namespace lfprobe
