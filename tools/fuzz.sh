@@ -8,7 +8,8 @@
 # --seconds N: each harness runs N seconds (default 60); --runs N: N executions each instead.
 # --jobs J: J harnesses at a time (default 1). --fresh-corpus: start from the seeds in a
 # temporary corpus, leaving build-fuzz/corpus as it is (the test suite's short runs).
-# HARNESS: text_scan, ply, obj_mtl, camera, manifest, scan_cache, prepared_cloud (default: all).
+# HARNESS: text_scan, ply, obj_mtl, camera, manifest, scan_cache, prepared_cloud, spatial_cloud
+# (default: all).
 # A crash stops its harness and leaves the input in build-fuzz/crashes/; the command then exits 1.
 # Each run's figures are printed and appended to build-fuzz/fuzz_runs.csv, whose totals per
 # harness are printed at the end.
@@ -27,12 +28,12 @@ while [ $# -gt 0 ]; do
     --runs) runs="$2"; shift 2 ;;
     --jobs) jobs="$2"; shift 2 ;;
     --fresh-corpus) fresh=1; shift ;;
-    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
     -*) echo "tools/fuzz.sh: unknown option $1 (see --help)" >&2; exit 2 ;;
     *) harnesses+=("$1"); shift ;;
   esac
 done
-all=(text_scan ply obj_mtl camera manifest scan_cache prepared_cloud)
+all=(text_scan ply obj_mtl camera manifest scan_cache prepared_cloud spatial_cloud)
 [ ${#harnesses[@]} -gt 0 ] || harnesses=("${all[@]}")
 for h in "${harnesses[@]}"; do
   [ -f "tests/fuzz/${h}_fuzzer.cpp" ] || { echo "tools/fuzz.sh: no harness $h (tests/fuzz/${h}_fuzzer.cpp)" >&2; exit 2; }

@@ -188,6 +188,10 @@ def seeds(shared: str) -> dict[str, list[bytes]]:
     out["prepared_cloud_fuzzer"] = [b"\x01" + geometry + head + order + struct.pack("<Q", 0),
                                     b"\x01" + geometry + head + order + one_level,
                                     b"\x00LFPPREP1\x01\x00\x00\x00"]
+    # Spatial clouds: the harness's genuine file as it is (odd first byte, nothing written over
+    # its sections), its sections' first bytes zeroed or all ones, and a bare magic.
+    out["spatial_cloud_fuzzer"] = [b"\x01", b"\x01" + bytes(64), b"\x01" + b"\xff" * 4096,
+                                   b"\x00LFPSPAT1\x01\x00\x00\x00"]
     return out
 
 

@@ -2,6 +2,7 @@
 // processes bake: core/cluster_bake.py hands them to Dask workers.
 #include <algorithm>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -68,7 +69,10 @@ void bind_staged_bake(py::module_& m) {
                                [](const CloudBakeSource& s) { return s.normals_seconds; })
         .def_property_readonly("hierarchy_seconds",
                                [](const CloudBakeSource& s) { return s.hierarchy_seconds; })
-        .def_property_readonly("from_cache", [](const CloudBakeSource& s) { return s.from_cache; });
+        .def_property_readonly("from_cache", [](const CloudBakeSource& s) { return s.from_cache; })
+        .def_property_readonly(
+            "cache_entry", [](const CloudBakeSource& s) { return s.cache_entry; },
+            "The prepared-cloud cache entry read or written (\"\" without a cache folder).");
 
     m.def(
         "start_prepare_cloud_bake",
@@ -91,6 +95,57 @@ void bind_staged_bake(py::module_& m) {
         "(resolution, splat_scale, hole_fill_texels, max_splat_radius_texels, normal_neighbours, "
         "lod_texels, splat_edge_margin, splat_core_scale, face_the_probe); cache_dir as "
         "bake_probe_set's. The Job's result is a CloudBakeSource.");
+
+    py::class_<SpatialCloud, std::shared_ptr<SpatialCloud>>(
+        m, "SpatialCloud",
+        "A prepared cloud mapped from its file (open_spatial_cloud), which a probe's bake reads "
+        "only in the parts its cut needs.")
+        .def_property_readonly("point_count", &SpatialCloud::point_count)
+        .def_property_readonly("file_bytes", &SpatialCloud::file_bytes)
+        .def_property_readonly("path", &SpatialCloud::path)
+        .def_property_readonly(
+            "resident_bytes",
+            [](const SpatialCloud& c) -> py::object {
+                const std::optional<std::size_t> bytes = c.resident_bytes();
+                return bytes ? py::object(py::int_(*bytes)) : py::object(py::none());
+            },
+            "The file's bytes this process has touched and holds (None where the system does "
+            "not say).");
+
+    m.def(
+        "start_write_spatial_cloud",
+        [](std::shared_ptr<CloudBakeSource> source, const std::string& cache_dir) {
+            return std::make_unique<Job>(
+                std::function<std::optional<SpatialCloudEntry>(Progress&)>(
+                    [source, cache_dir](Progress& progress) {
+                        return write_spatial_cloud_of(*source, cache_dir, &progress);
+                    }),
+                std::function<py::object(std::optional<SpatialCloudEntry> &&)>(
+                    [](std::optional<SpatialCloudEntry>&& entry) -> py::object {
+                        if (!entry) {
+                            return py::none();
+                        }
+                        py::dict d;
+                        d["path"] = entry->path;
+                        d["key"] = entry->key_hex;
+                        d["written"] = entry->written;
+                        return d;
+                    }));
+        },
+        py::arg("source"), py::arg("cache_dir"),
+        "Start writing the spatial cloud of `source` into `cache_dir` (unless it is there): the "
+        "prepared cloud laid out so that a process bakes from only the parts its probes read. "
+        "The Job's result is a dict (path, key, written) or None when the source bakes from "
+        "every point (lod_texels 0, or no hierarchy), which a spatial cloud does not serve.");
+
+    m.def(
+        "open_spatial_cloud",
+        [](const std::string& path, const std::string& key) {
+            return std::make_shared<SpatialCloud>(path, key);
+        },
+        py::arg("path"), py::arg("key"),
+        "Maps the spatial cloud at `path` without reading it; IOError unless it is the spatial "
+        "cloud of `key` (start_write_spatial_cloud's 'key').");
 
     m.def(
         "cloud_bake_manifest",
@@ -160,6 +215,37 @@ void bind_staged_bake(py::module_& m) {
         "cloud_bake_manifest gives them) into the staging folder, each written atomically. The "
         "Job's result is one dict per probe: index, record (its manifest entry, JSON text), "
         "bytes_on_disk.");
+
+    m.def(
+        "start_bake_staged_probes",
+        [](std::shared_ptr<SpatialCloud> cloud, std::vector<std::vector<double>> positions,
+           std::vector<std::size_t> indices, const std::string& staging, const py::dict& settings) {
+            const BakeSettings bake = cloud_bake_options_from(settings).settings;
+            std::vector<glm::dvec3> local;
+            for (const auto& p : positions) {
+                local.push_back(dvec3_from(p, "probe position"));
+            }
+            auto placement =
+                std::make_shared<const ProbePlacement>(ProbePlacement::from_positions(local));
+            return std::make_unique<Job>(
+                std::function<std::vector<StagedProbe>(Progress&)>(
+                    [cloud, bake, placement, indices, staging](Progress& progress) {
+                        return bake_staged_probes(*cloud, bake, *placement, indices, staging,
+                                                  &progress);
+                    }),
+                std::function<py::object(std::vector<StagedProbe> &&)>(
+                    [](std::vector<StagedProbe>&& staged) -> py::object {
+                        py::list out;
+                        for (const StagedProbe& s : staged) {
+                            out.append(staged_dict(s));
+                        }
+                        return out;
+                    }));
+        },
+        py::arg("source"), py::arg("positions"), py::arg("indices"), py::arg("staging"),
+        py::arg("settings"),
+        "The same from a SpatialCloud, with the bake settings (as start_prepare_cloud_bake's) "
+        "that the source it was written from had: the same probes, bit for bit.");
 
     m.def(
         "finish_probe_set_staging",

@@ -36,6 +36,7 @@ CloudBakeSource prepare_cloud_bake(std::shared_ptr<const PointCloud> cloud,
     if (!cache_dir.empty()) {
         key = prepared_cloud_key(*source.cloud, geometry_options, settings.lod_texels > 0.0f);
         entry = prepared_cloud_entry_path(key, cache_dir);
+        source.cache_entry = entry;
         if (std::optional<PreparedCloud> cached = read_prepared_cloud(entry, key)) {
             source.geometry = std::move(cached->geometry);
             source.hierarchy = std::move(cached->hierarchy);
@@ -78,10 +79,14 @@ ProbeSetManifest cloud_bake_manifest(const PointCloud& cloud, const ProbePlaceme
     return manifest;
 }
 
-std::vector<StagedProbe> bake_staged_probes(const CloudBakeSource& source,
-                                            const ProbePlacement& placement,
-                                            const std::vector<std::size_t>& indices,
-                                            const std::string& staging, Progress* progress) {
+namespace {
+
+// Bakes the probes `indices` of `placement` one at a time with bake(position), each written
+// atomically into `staging`.
+template <class Bake>
+std::vector<StagedProbe> stage_probes(const ProbePlacement& placement,
+                                      const std::vector<std::size_t>& indices,
+                                      const std::string& staging, Progress* progress, Bake&& bake) {
     for (const std::size_t i : indices) {
         if (i >= placement.positions.size()) {
             throw InputError("bake: probe " + std::to_string(i) + " does not exist (the set has " +
@@ -89,17 +94,56 @@ std::vector<StagedProbe> bake_staged_probes(const CloudBakeSource& source,
         }
     }
     std::vector<StagedProbe> staged;
-    for (std::size_t n = 0; n < indices.size(); ++n) {
+    for (const std::size_t i : indices) {
         if (progress != nullptr) {
             progress->throw_if_cancelled();
         }
-        const std::size_t i = indices[n];
-        const ProbeMap map =
-            bake_probe_from_hierarchy(*source.cloud, source.geometry, source.hierarchy,
-                                      placement.positions[i], source.settings, progress);
+        const ProbeMap map = bake(placement.positions[i]);
         staged.push_back(write_staged_probe(staging, i, map));
     }
     return staged;
+}
+
+} // namespace
+
+std::vector<StagedProbe> bake_staged_probes(const CloudBakeSource& source,
+                                            const ProbePlacement& placement,
+                                            const std::vector<std::size_t>& indices,
+                                            const std::string& staging, Progress* progress) {
+    return stage_probes(placement, indices, staging, progress, [&](const glm::dvec3& centre) {
+        return bake_probe_from_hierarchy(*source.cloud, source.geometry, source.hierarchy, centre,
+                                         source.settings, progress);
+    });
+}
+
+std::vector<StagedProbe> bake_staged_probes(const SpatialCloud& cloud, const BakeSettings& settings,
+                                            const ProbePlacement& placement,
+                                            const std::vector<std::size_t>& indices,
+                                            const std::string& staging, Progress* progress) {
+    return stage_probes(placement, indices, staging, progress, [&](const glm::dvec3& centre) {
+        return bake_probe_from_spatial_cloud(cloud, centre, settings, progress);
+    });
+}
+
+std::optional<SpatialCloudEntry> write_spatial_cloud_of(const CloudBakeSource& source,
+                                                        const std::string& cache_dir,
+                                                        Progress* progress) {
+    if (cache_dir.empty() || !(source.settings.lod_texels > 0.0f) ||
+        source.hierarchy.levels.empty()) {
+        return std::nullopt;
+    }
+    const PreparedCloudKey key = prepared_cloud_key(*source.cloud, source.geometry_options, true);
+    SpatialCloudEntry entry{spatial_cloud_entry_path(key, cache_dir), prepared_cloud_key_hex(key)};
+    try {
+        const SpatialCloud existing(entry.path, entry.key_hex);
+        return entry;
+    } catch (const IoError&) {
+        // Missing or not usable: written (again) below.
+    }
+    write_spatial_cloud(entry.path, key, *source.cloud, source.geometry, source.hierarchy,
+                        progress);
+    entry.written = true;
+    return entry;
 }
 
 BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacement& placement,

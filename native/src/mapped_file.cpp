@@ -2,7 +2,11 @@
 #include "lfprobe/mapped_file.hpp"
 
 #include <cerrno>
+#include <cstdint>
+#include <cstdio>
 #include <cstring>
+#include <fstream>
+#include <string>
 #include <utility>
 
 #include <fcntl.h>
@@ -43,7 +47,7 @@ private:
 
 } // namespace
 
-MappedFile::MappedFile(const std::string& path) : path_(path) {
+MappedFile::MappedFile(const std::string& path, Access access) : path_(path) {
     // O_NONBLOCK: opening a FIFO for reading would otherwise wait for a writer, forever; the
     // fstat below then refuses it. Regular files ignore the flag.
     const FileDescriptor fd(::open(path.c_str(), O_RDONLY | O_CLOEXEC | O_NONBLOCK));
@@ -67,8 +71,9 @@ MappedFile::MappedFile(const std::string& path) : path_(path) {
         size_ = 0;
         throw_system_error(path, "map", error);
     }
-    // Parsers read front to back within each chunk; ask the kernel to read ahead.
-    ::madvise(mapping, size_, MADV_WILLNEED);
+    // Parsers read front to back within each chunk: ask the kernel to read ahead. A reader in
+    // parts would pay for reading what it never touches.
+    ::madvise(mapping, size_, access == Access::whole ? MADV_WILLNEED : MADV_RANDOM);
     data_ = static_cast<const char*>(mapping);
 }
 
@@ -100,6 +105,34 @@ void MappedFile::unmap() noexcept {
     }
     data_ = nullptr;
     size_ = 0;
+}
+
+std::optional<std::size_t> MappedFile::resident_bytes() const {
+    if (!owned_ || data_ == nullptr) {
+        return std::nullopt;
+    }
+    // smaps lists each mapping as "start-end perms ..." and then its fields, "Rss:" among them.
+    std::ifstream smaps("/proc/self/smaps");
+    if (!smaps) {
+        return std::nullopt;
+    }
+    const auto start = reinterpret_cast<std::uintptr_t>(data_);
+    std::string line;
+    bool ours = false;
+    while (std::getline(smaps, line)) {
+        unsigned long long first = 0;
+        unsigned long long last = 0;
+        char dash = 0;
+        if (std::sscanf(line.c_str(), "%llx%c%llx", &first, &dash, &last) == 3 && dash == '-') {
+            ours = first == start;
+            continue;
+        }
+        unsigned long long kib = 0;
+        if (ours && std::sscanf(line.c_str(), "Rss: %llu kB", &kib) == 1) {
+            return static_cast<std::size_t>(kib) * 1024;
+        }
+    }
+    return std::nullopt;
 }
 
 } // namespace lfprobe

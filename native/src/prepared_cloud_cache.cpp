@@ -269,15 +269,20 @@ PreparedCloudKey prepared_cloud_key(const PointCloud& cloud, const LocalGeometry
     return {{hash.high64, hash.low64}, static_cast<std::uint64_t>(cloud.size())};
 }
 
-std::string prepared_cloud_entry_path(const PreparedCloudKey& key, const std::string& cache_dir) {
-    if (cache_dir.empty()) {
-        return {};
-    }
+std::string prepared_cloud_key_hex(const PreparedCloudKey& key) {
     std::array<char, 33> name{};
     std::snprintf(name.data(), name.size(), "%016llx%016llx",
                   static_cast<unsigned long long>(key.hash[0]),
                   static_cast<unsigned long long>(key.hash[1]));
-    return (fs::path(cache_dir) / ("prepared-" + std::string(name.data()) + ".lfpprep")).string();
+    return name.data();
+}
+
+std::string prepared_cloud_entry_path(const PreparedCloudKey& key, const std::string& cache_dir) {
+    if (cache_dir.empty()) {
+        return {};
+    }
+    return (fs::path(cache_dir) / ("prepared-" + prepared_cloud_key_hex(key) + ".lfpprep"))
+        .string();
 }
 
 std::optional<PreparedCloud> read_prepared_cloud(const std::string& entry,

@@ -556,4 +556,20 @@ ProbeMap bake_probe_from_hierarchy(const PointCloud& cloud, const LocalGeometry&
     return bake_from(CutPoints{cloud, geometry, colours, cut}, centre, settings, progress);
 }
 
+ProbeMap bake_probe_from_gathered_cut(const PointCloud& points, const LocalGeometry& geometry,
+                                      const HierarchyCut& cut, const glm::dvec3& centre,
+                                      const BakeSettings& settings, Progress* progress) {
+    check_bake_arguments(settings, points.size(), geometry, centre);
+    if (!points.has_colors() && points.size() > 0) {
+        throw InputError("bake: a gathered cut carries its points' colours");
+    }
+    for (const std::uint32_t i : cut.points) {
+        if (i >= points.size()) {
+            throw InputError("bake: a cut names a point it did not gather");
+        }
+    }
+    const PointColours colours(points);
+    return bake_from(CutPoints{points, geometry, colours, cut}, centre, settings, progress);
+}
+
 } // namespace lfprobe

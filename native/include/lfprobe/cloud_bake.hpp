@@ -6,6 +6,7 @@
 
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,7 @@
 #include "lfprobe/probe_set.hpp"
 #include "lfprobe/probe_set_staging.hpp"
 #include "lfprobe/progress.hpp"
+#include "lfprobe/spatial_cloud.hpp"
 
 namespace lfprobe {
 
@@ -34,6 +36,8 @@ struct CloudBakeSource {
     // True when the geometry and the hierarchy were read from the prepared-cloud cache
     // (prepared_cloud_cache.hpp); normals_seconds is then the read.
     bool from_cache = false;
+    // The prepared-cloud cache entry read or written ("" without a cache folder).
+    std::string cache_entry;
 };
 
 // Estimates the cloud's local geometry and builds the hierarchy `settings` bake from, on all
@@ -62,6 +66,27 @@ struct CloudBakeSource {
                                                           const std::vector<std::size_t>& indices,
                                                           const std::string& staging,
                                                           Progress* progress = nullptr);
+
+// The spatial cloud of `source` (spatial_cloud.hpp) in `cache_dir`, written unless a file of its
+// key is there already: what lets a cluster's workers bake from only the parts of the cloud
+// their probes read. None when `source` bakes from every point (lod_texels 0, or a cloud too
+// sparse for a hierarchy), which a spatial cloud does not serve. Cancellable; IoError when it
+// cannot be written.
+struct SpatialCloudEntry {
+    std::string path;
+    std::string key_hex;
+    bool written = false; // false: the file was there already
+};
+[[nodiscard]] std::optional<SpatialCloudEntry> write_spatial_cloud_of(const CloudBakeSource& source,
+                                                                      const std::string& cache_dir,
+                                                                      Progress* progress = nullptr);
+
+// bake_staged_probes from a spatial cloud with `settings`: the same files, bit for bit, as
+// from the CloudBakeSource the file was written from.
+[[nodiscard]] std::vector<StagedProbe>
+bake_staged_probes(const SpatialCloud& cloud, const BakeSettings& settings,
+                   const ProbePlacement& placement, const std::vector<std::size_t>& indices,
+                   const std::string& staging, Progress* progress = nullptr);
 
 // Bakes every probe of `placement` from `cloud` into `folder` (created when missing), one probe
 // at a time so memory stays at one probe's maps, and writes the manifest last. `sources` goes

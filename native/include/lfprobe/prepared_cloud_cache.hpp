@@ -40,6 +40,9 @@ struct PreparedCloudKey {
                                                   const LocalGeometryOptions& options,
                                                   bool with_hierarchy);
 
+// The key as 32 hex digits, as entries are named.
+[[nodiscard]] std::string prepared_cloud_key_hex(const PreparedCloudKey& key);
+
 // The entry for `key` in `cache_dir` ("" when cache_dir is empty).
 [[nodiscard]] std::string prepared_cloud_entry_path(const PreparedCloudKey& key,
                                                     const std::string& cache_dir);

@@ -85,6 +85,15 @@ bake_probe_from_hierarchy(const PointCloud& cloud, const LocalGeometry& geometry
                           const PointHierarchy& hierarchy, const glm::dvec3& centre,
                           const BakeSettings& settings, Progress* progress = nullptr);
 
+// Bakes one probe from a cut already gathered: `cut.points` index `points` (and `geometry`,
+// made for them), whose colours are the ones the bake takes (PointColours of the whole cloud).
+// What a process that maps a spatial cloud (spatial_cloud.hpp) bakes from; given the same
+// points, surfels and order as bake_probe_from_hierarchy's cut, the same probe, bit for bit.
+[[nodiscard]] ProbeMap
+bake_probe_from_gathered_cut(const PointCloud& points, const LocalGeometry& geometry,
+                             const HierarchyCut& cut, const glm::dvec3& centre,
+                             const BakeSettings& settings, Progress* progress = nullptr);
+
 // The hierarchy bakes with `settings` take from `cloud`: built (build_point_hierarchy) when
 // settings.lod_texels asks for cuts, else empty, which bake_probe_from_hierarchy reads as
 // "every point". Built once, it serves every probe of a set.
