@@ -71,8 +71,21 @@ def test_two_workers_bake_the_local_set_bit_for_bit(scan, local_set, tmp_path):
     assert code == 0
     assert_same_set(local_set, str(out))
     assert leftovers(tmp_path) == []
-    # The client prepared the cloud into the cache; the workers read it instead of computing.
+    # The client prepared the cloud into the cache and wrote it as a spatial cloud, which the
+    # tasks read in parts instead of loading the cloud.
     assert len(list((tmp_path / "cache").glob("prepared-*.lfpprep"))) == 1
+    assert len(list((tmp_path / "cache").glob("spatial-*.lfpspatial"))) == 1
+
+
+def test_tasks_that_load_the_whole_cloud_bake_the_same_set(scan, local_set, tmp_path, local_cluster):
+    cluster, _client = local_cluster
+    out = tmp_path / "set"
+    summary = cluster_bake.bake_scans_on_cluster(
+        [scan], str(out), ProbePlacementSpec(**GRID), BakeOptions(resolution=128),
+        cache_dir=str(tmp_path / "cache"), scheduler=cluster.scheduler_address, probes_per_task=2,
+        read_in_parts=False)
+    assert summary["cluster"]["tasks_reading_in_parts"] == 0
+    assert_same_set(local_set, str(out))
 
 
 def test_workers_read_the_cloud_the_client_prepared(scan, tmp_path, local_cluster):
@@ -83,6 +96,9 @@ def test_workers_read_the_cloud_the_client_prepared(scan, tmp_path, local_cluste
     figures = summary["cluster"]
     assert figures["workers_reading_the_prepared_cloud"] == figures["workers_used"] >= 1
     assert summary["hierarchy_seconds"] == 0.0
+    # Every task read the spatial cloud in parts: some of its pages, never more than the file.
+    assert figures["tasks_reading_in_parts"] == figures["tasks"] == 2
+    assert 0 < figures["bytes_read_per_task"] <= figures["spatial_cloud_bytes"]
 
 
 def test_a_worker_killed_mid_bake_still_gives_the_identical_set(scan, local_set, tmp_path, local_cluster):

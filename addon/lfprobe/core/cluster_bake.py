@@ -2,11 +2,15 @@
 worker processes) instead of in this process.
 
 The client (this process) reads the scans once, which fills the parse cache, opens the set's
-staging folder and hands the probes out as tasks of `probes_per_task` probes each. A worker
-reads the same scans through the same cache (shared storage: the scan files, the cache folder
-and the output folder must be at the same paths on every worker), makes the cloud ready to bake
-once (normals, spacing, point hierarchy; kept for the worker's later tasks) and writes each of
-its probes atomically into the staging folder. The client writes the manifest last, only when
+staging folder and hands the probes out as tasks of `probes_per_task` probes each. With a cache
+folder (shared storage: the scan files, the cache folder and the output folder must be at the
+same paths on every worker), the client prepares the cloud (normals, spacing, point hierarchy)
+and writes it as a spatial cloud (native spatial_cloud.hpp): the points in the hierarchy's
+order and the hierarchy's levels, which a task maps and reads only where its probes' cuts go:
+the full-density points near its probes and coarse cells elsewhere, so a cloud larger than a
+worker's memory still bakes. Without a cache folder each worker reads the scans itself and makes
+the whole cloud ready once (kept for its later tasks). A worker writes each of its probes
+atomically into the staging folder. The client writes the manifest last, only when
 every probe is there, and swaps the set in: the result is the set a local bake writes, byte for
 byte. A worker that dies mid-task leaves at most a temporary file, which the finish removes;
 Dask runs its task again on another worker. Cancelling (Ctrl-C, the progress callback, Esc in
@@ -66,6 +70,10 @@ class CloudSpec:
     settings: tuple  # (name, value) pairs of the native bake settings
     # One 4×4 transform per file (Blender's scan objects), or none: the files as they are.
     file_matrices: tuple = ()
+    # The spatial cloud the client wrote (path and key), which tasks read in parts; "": none,
+    # each worker loads the whole cloud.
+    spatial_path: str = ""
+    spatial_key: str = ""
 
 
 def _load_cloud(spec: CloudSpec, world_offset, progress: Progress = None):
@@ -102,6 +110,8 @@ def bake_probe_batch(spec_fields: dict, positions: list, indices: list, staging:
     `staging`. spec_fields: a CloudSpec's fields. Returns the staged records
     (finish_probe_set_staging's input) and this worker's figures."""
     spec = CloudSpec(**spec_fields)
+    if spec.spatial_path:
+        return _bake_from_spatial_cloud(spec, positions, indices, staging)
     started = time.perf_counter()
     fresh = spec not in _prepared
     before = _private_memory_bytes()
@@ -118,13 +128,48 @@ def bake_probe_batch(spec_fields: dict, positions: list, indices: list, staging:
         "hierarchy_seconds": source.hierarchy_seconds if fresh else 0.0,
         "prepared_from_cache": bool(source.from_cache),
         "bake_seconds": time.perf_counter() - prepared,
-        "bytes_read": _bytes_read(spec) if fresh else 0,
+        "bytes_read": _bytes_read(spec, source) if fresh else 0,
         "peak_memory_bytes": _peak_memory_bytes(),
         # The memory the worker owns itself (not shared with other processes) before it loaded
         # this cloud (the interpreter, Dask, lfprobe) and after it (the cloud ready to bake).
         "base_memory_bytes": before if fresh else 0,
         "cloud_memory_bytes": (_private_memory_bytes() - before) if fresh else 0,
+        "read_in_parts": False,
+        "file_bytes": 0,
     }
+
+
+def _bake_from_spatial_cloud(spec: CloudSpec, positions: list, indices: list, staging: str) -> dict:
+    """A task that maps the spatial cloud and bakes from the parts its probes' cuts read. Opened
+    per task (it reads a header and a table), so that what the mapping holds afterwards is this
+    task's reading."""
+    _native = native.load()
+    started = time.perf_counter()
+    before = _private_memory_bytes()
+    cloud = _native.open_spatial_cloud(spec.spatial_path, spec.spatial_key)
+    opened = time.perf_counter()
+    job = _native.start_bake_staged_probes(cloud, positions, list(indices), staging, dict(spec.settings))
+    staged = job.run(lambda _fraction, _stage: os.path.isdir(staging))
+    result = {
+        "staged": staged,
+        "worker_pid": os.getpid(),
+        "prepare_seconds": opened - started,
+        "normals_seconds": 0.0,
+        "hierarchy_seconds": 0.0,
+        "prepared_from_cache": True,
+        "bake_seconds": time.perf_counter() - opened,
+        # The file's pages this task touched: what it read of the cloud (its resident part of
+        # the mapping; pages the kernel mapped in around a fault from its cache count too).
+        "bytes_read": cloud.resident_bytes or 0,
+        "peak_memory_bytes": _peak_memory_bytes(),
+        "base_memory_bytes": before,
+        # The task's own memory for the cloud: the pages it read and the cuts it gathered.
+        "cloud_memory_bytes": max(0, _private_memory_bytes() - before),
+        "read_in_parts": True,
+        "file_bytes": cloud.file_bytes,
+    }
+    del cloud
+    return result
 
 
 def _peak_memory_bytes() -> int:
@@ -144,10 +189,11 @@ def _private_memory_bytes() -> int:
         return 0
 
 
-def _bytes_read(spec: CloudSpec) -> int:
+def _bytes_read(spec: CloudSpec, source) -> int:
     """What a worker reads to get the cloud: each scan's parse-cache entry where the cache holds
-    one, else the scan file itself (E57 and LAS/LAZ are read through their libraries, uncached)."""
-    total = 0
+    one, else the scan file itself (E57 and LAS/LAZ are read through their libraries, uncached),
+    and the prepared-cloud entry where it read one."""
+    total = os.path.getsize(source.cache_entry) if source.from_cache and source.cache_entry else 0
     for path in spec.paths:
         entry = native.load().scan_cache_entry_path(path, spec.columns, spec.cache_dir) if spec.cache_dir else ""
         total += os.path.getsize(entry if entry and os.path.isfile(entry) else path)
@@ -209,12 +255,15 @@ def bake_scans_on_cluster(
     workers: Optional[int] = None,
     probes_per_task: int = 1,
     progress: Progress = None,
+    read_in_parts: bool = True,
 ) -> dict:
     """Scan files → probe set folder, the probes baked on a Dask cluster: `scheduler` (an address
     such as tcp://host:8786) or a local cluster of `workers` processes. file_matrices: one 4×4
     transform per file that moves its points (Blender's scan objects), or none. Returns the bake summary
     (as bake_from_scans) with a "cluster" section: workers, tasks, seconds per probe, what the
-    workers read and the scheduler's overhead."""
+    workers read and the scheduler's overhead. read_in_parts: with a cache folder, tasks map the
+    spatial cloud the client writes and read only what their probes need (False: every worker
+    loads the whole cloud, for comparison)."""
     if options.plan is not None:
         raise InputError("a cluster bake bakes every probe at one resolution: plan first "
                          "(./lfprobe place) and bake the planned positions, or bake --auto locally")
@@ -249,10 +298,17 @@ def bake_scans_on_cluster(
         points = len(cloud)
         load_seconds = time.perf_counter() - started
         prepare_started = time.perf_counter()
+        spatial_seconds = 0.0
         if spec.cache_dir:
             # Prepared once here into the shared cache, the cloud's normals, spacing and
             # hierarchy are read by every worker instead of computed by each.
-            _native.start_prepare_cloud_bake(cloud, settings, cache_dir=spec.cache_dir).run(progress)
+            source = _native.start_prepare_cloud_bake(cloud, settings, cache_dir=spec.cache_dir).run(progress)
+            spatial_started = time.perf_counter()
+            entry = _native.start_write_spatial_cloud(source, spec.cache_dir).run(progress) if read_in_parts else None
+            spatial_seconds = time.perf_counter() - spatial_started
+            if entry is not None:
+                spec = dataclasses.replace(spec, spatial_path=entry["path"], spatial_key=entry["key"])
+            del source
         prepare_seconds = time.perf_counter() - prepare_started
         del cloud  # the workers load their own; the client keeps no cloud during the bake
         summary = _run_tasks(cluster, out_dir, spec, plan, probes_per_task, progress)
@@ -262,6 +318,7 @@ def bake_scans_on_cluster(
     summary["world_offset"] = list(spec.world_offset)
     summary["cluster"]["client_load_seconds"] = load_seconds
     summary["cluster"]["client_prepare_seconds"] = prepare_seconds
+    summary["cluster"]["client_spatial_cloud_seconds"] = spatial_seconds
     summary["cluster"]["wall_seconds"] = time.perf_counter() - started
     apply_storage(out_dir, summary, options)
     return summary
@@ -377,6 +434,10 @@ def _figures(results: list, probes: int, tasks: int, tasks_seconds: float, clust
             "peak_memory_per_worker": max([r["peak_memory_bytes"] for r in results] or [0]),
             "base_memory_per_worker": max([r["base_memory_bytes"] for r in results] or [0]),
             "cloud_memory_per_worker": max([r["cloud_memory_bytes"] for r in results] or [0]),
+            # Tasks that read the spatial cloud in parts, the file's size and the most one task read.
+            "tasks_reading_in_parts": sum(1 for r in results if r.get("read_in_parts")),
+            "spatial_cloud_bytes": max([r.get("file_bytes", 0) for r in results] or [0]),
+            "bytes_read_per_task": max([r["bytes_read"] for r in results if r.get("read_in_parts")] or [0]),
             "overhead_seconds_per_task": overhead,
         },
     }

@@ -95,11 +95,16 @@ def _print_bake_summary(args, summary: dict, source: str) -> int:
     if "cluster" in summary:
         c = summary["cluster"]
         print(f"  cluster: {c['workers']} worker(s), {c['tasks']} task(s) in {c['tasks_seconds']:.2f} s, "
-              f"{c['probes_per_second']:.2f} probes/s; each worker read {_mib(c['bytes_read_per_worker'])} "
-              f"and made the cloud ready in {c['prepare_seconds_per_worker']:.2f} s "
-              f"({c.get('workers_reading_the_prepared_cloud', 0)} read what the client prepared in "
-              f"{c.get('client_prepare_seconds', 0.0):.2f} s), peak memory "
-              f"{_mib(c['peak_memory_per_worker'])}; "
+              f"{c['probes_per_second']:.2f} probes/s; " + (
+                  f"each task read at most {_mib(c['bytes_read_per_task'])} of the "
+                  f"{_mib(c['spatial_cloud_bytes'])} spatial cloud the client prepared in "
+                  f"{c.get('client_prepare_seconds', 0.0):.2f} s"
+                  if c.get("tasks_reading_in_parts") else
+                  f"each worker read {_mib(c['bytes_read_per_worker'])} "
+                  f"and made the cloud ready in {c['prepare_seconds_per_worker']:.2f} s "
+                  f"({c.get('workers_reading_the_prepared_cloud', 0)} read what the client prepared in "
+                  f"{c.get('client_prepare_seconds', 0.0):.2f} s)") +
+              f", peak memory {_mib(c['peak_memory_per_worker'])}; "
               f"scheduler overhead {1000 * c['overhead_seconds_per_task']:.1f} ms/task")
     print(
         f"  coverage: surface {100 * cov['surface']:.2f}%, inferred {100 * cov['inferred']:.2f}%, "
