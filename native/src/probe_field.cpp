@@ -137,12 +137,15 @@ struct Candidate {
 // where another had stopped (that one may now see further), up to a few passes. True when a
 // probe answered.
 bool ask_in_passes(FieldQuery& query, TriedProbes& tried, const Candidate* candidates,
-                   std::size_t count) {
+                   std::size_t count, bool skip_nothing) {
     constexpr int kMaxPasses = 4;
     for (int pass = 0; pass < kMaxPasses; ++pass) {
         const double before = query.result.free_until;
         for (std::size_t k = 0; k < count; ++k) {
             const std::size_t index = candidates[k].index;
+            if (skip_nothing && query.field.knows_nothing(index)) {
+                continue; // it would answer UNKNOWN where the ray starts, proving nothing
+            }
             if (!tried.worth_asking(index, std::max(query.ray.t_min, query.result.free_until))) {
                 continue;
             }
@@ -275,6 +278,7 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
                                        "/manifest.json)");
             }
         }
+        field.note_what_probes_know(false);
         return field;
     }
     if (progress != nullptr) {
@@ -292,6 +296,7 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
     for (std::size_t i = 0; i < count; ++i) {
         field.manifest_.probes[i].memory_bytes = field.probe(i).memory_bytes();
     }
+    field.note_what_probes_know(true);
     return field;
 }
 
@@ -324,6 +329,17 @@ ProbeField::ProbeField(const ProbePlacement& placement, std::vector<ProbeMap> pr
             s.ready.store(true, std::memory_order_release);
         });
     });
+    note_what_probes_know(true);
+}
+
+void ProbeField::note_what_probes_know(bool from_maps) {
+    knows_nothing_.assign(probe_count(), 0);
+    for (std::size_t i = 0; i < probe_count(); ++i) {
+        // A record without coverage (all zero) is not taken for one that knows nothing.
+        const ProbeCoverage c = from_maps ? coverage_of(probe(i)) : manifest_.probes[i].coverage;
+        knows_nothing_[i] =
+            c.unknown >= 1.0 && c.surface == 0.0 && c.inferred == 0.0 && c.empty == 0.0 ? 1 : 0;
+    }
 }
 
 void ProbeField::check_placement() const {
@@ -418,7 +434,7 @@ FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
     }
     std::sort_heap(best.begin(), best.begin() + static_cast<long>(kept));
     TriedProbes tried;
-    if (ask_in_passes(query, tried, best.data(), kept)) {
+    if (ask_in_passes(query, tried, best.data(), kept, settings.skip_probes_that_know_nothing)) {
         return query.result;
     }
     query.finish_unanswered();
@@ -440,12 +456,21 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
             std::array<std::size_t, 8> corner_index{};
             const std::size_t corner_count = grid_cell_corners(grid(), span->cell, corner_index);
             std::array<Candidate, 8> corners{};
+            std::size_t useful = 0;
             for (std::size_t k = 0; k < corner_count; ++k) {
-                const glm::dvec3 to = probe_position(corner_index[k]) - entry;
-                corners[k] = Candidate{glm::dot(to, to), corner_index[k]};
+                const std::size_t index = corner_index[k];
+                if (settings.skip_probes_that_know_nothing && knows_nothing(index)) {
+                    continue;
+                }
+                const glm::dvec3 to = probe_position(index) - entry;
+                corners[useful++] = Candidate{glm::dot(to, to), index};
             }
-            sort_candidates(corners.data(), corner_count);
-            if (ask_in_passes(query, tried, corners.data(), corner_count)) {
+            if (useful == 0) {
+                continue; // a cell whose probes know nothing: no one to ask
+            }
+            sort_candidates(corners.data(), useful);
+            if (ask_in_passes(query, tried, corners.data(), useful,
+                              settings.skip_probes_that_know_nothing)) {
                 return query.result;
             }
         }

@@ -284,6 +284,67 @@ TEST(Grid, AFallbackAnswersOnlyWhereNoProbeDoes) {
     EXPECT_NEAR(answered.t, truth(wider, ray), 0.02);
 }
 
+TEST(Grid, ACellWhoseProbesKnowNothingIsSkipped) {
+    // Three probes along x; the two of the cell x in [0.5, 1.5] know nothing (a part of the
+    // room no scan reached). A ray that stays in that cell asks no probe; one that runs from it
+    // into the next cell asks only the probe that knows something there. The answers are those
+    // of asking every probe.
+    const BoxRoomScene room = scenes::empty_box_room();
+    const ProbeGrid grid = ProbeGrid::spanning({-0.5, 0.0, 1.2}, {1.5, 0.0, 1.2}, {3, 1, 1});
+    const ProbePlacement placement = ProbePlacement::from_grid(grid);
+    std::vector<ProbeMap> probes;
+    for (const glm::dvec3& p : placement.positions) {
+        probes.push_back(scenes::analytic_probe(room, p, 64));
+    }
+    for (std::size_t k = 1; k < 3; ++k) {
+        for (std::size_t i = 0; i < probes[k].texel_count(); ++i) {
+            probes[k].set_unknown(i);
+        }
+    }
+    const ProbeField field(placement, std::move(probes));
+    EXPECT_FALSE(field.knows_nothing(0));
+    EXPECT_TRUE(field.knows_nothing(1));
+    EXPECT_TRUE(field.knows_nothing(2));
+    FieldTraceSettings ask_all;
+    ask_all.skip_probes_that_know_nothing = false;
+
+    const Ray stays = make_ray({0.9, 0.05, 1.25}, {1.0, 0.02, 0.01});
+    const FieldTraceResult skipped = field.trace(stays);
+    const FieldTraceResult asked = field.trace(stays, ask_all);
+    EXPECT_EQ(skipped.status, TraceStatus::Unknown);
+    EXPECT_EQ(skipped.probes_tried, 0u);
+    EXPECT_EQ(skipped.steps, 0u);
+    EXPECT_EQ(asked.status, TraceStatus::Unknown);
+    EXPECT_EQ(asked.probes_tried, 2u);
+    EXPECT_EQ(skipped.free_until, asked.free_until);
+
+    const Ray leaves = make_ray({0.9, 0.05, 1.25}, {-1.0, 0.03, 0.02});
+    const FieldTraceResult one = field.trace(leaves);
+    const FieldTraceResult all = field.trace(leaves, ask_all);
+    EXPECT_EQ(one.status, TraceStatus::Hit);
+    EXPECT_EQ(one.probe, 0);
+    EXPECT_EQ(one.probes_tried, 1u);
+    EXPECT_GT(all.probes_tried, one.probes_tried);
+    EXPECT_EQ(one.t, all.t);
+    EXPECT_EQ(one.radiance, all.radiance);
+    EXPECT_NEAR(one.t, truth(room, leaves), 0.02);
+
+    // Opened lazily from disk, the probes' manifest records say which know nothing, before
+    // any probe is read; a ray that stays in the cell reads none.
+    const std::filesystem::path folder =
+        std::filesystem::temp_directory_path() /
+        ("lfprobe_field_test_nothing_" + std::to_string(std::random_device{}()));
+    ProbeSetManifest manifest;
+    manifest.placement = placement;
+    (void)write_probe_set(folder.string(), manifest, [&](std::size_t i) { return field.probe(i); });
+    const ProbeField lazy = ProbeField::load(folder.string(), nullptr, 0, {}, true);
+    EXPECT_TRUE(lazy.knows_nothing(1) && lazy.knows_nothing(2) && !lazy.knows_nothing(0));
+    EXPECT_EQ(lazy.trace(stays).probes_tried, 0u);
+    EXPECT_EQ(lazy.loaded_probe_count(), 0u);
+    EXPECT_EQ(lazy.trace(leaves).t, one.t);
+    std::filesystem::remove_all(folder);
+}
+
 TEST(Grid, ProbeSetsLoadFromDiskAndModesAreChecked) {
     const BoxRoomScene room;
     const PointCloud cloud = room.cloud(0.05f, glm::dvec3(0.0, 0.0, 1.2));

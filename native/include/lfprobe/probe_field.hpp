@@ -55,6 +55,10 @@ struct FieldTraceSettings {
     // The angle one of the eye's samples spans (radians): the footprint filter's width. 0: no
     // footprint (the footprint filter reads as bilinear). The renderer sets it from the camera.
     double sample_angle = 0.0;
+    // Leave out probes that know nothing (every texel unknown: they answer UNKNOWN wherever a
+    // ray starts), and so the cells all of whose corners know nothing (false: ask them; the
+    // same answer, only slower; for tests and measurements).
+    bool skip_probes_that_know_nothing = true;
 };
 
 struct FieldTraceResult {
@@ -112,6 +116,9 @@ public:
     [[nodiscard]] int probe_resolution(std::size_t i) const {
         return manifest_.probes.at(i).resolution;
     }
+    // True when every texel of probe i is unknown: as its manifest record says for a set
+    // opened lazily, as its maps say otherwise.
+    [[nodiscard]] bool knows_nothing(std::size_t i) const { return knows_nothing_.at(i) != 0; }
     // How many probes' maps are in memory (all of them unless opened lazily).
     [[nodiscard]] std::size_t loaded_probe_count() const;
     // Probe i's prefiltered radiance (the footprint filter's); every probe's are built on the
@@ -153,6 +160,7 @@ private:
     void check_placement() const;
     [[nodiscard]] const ProbeSlot& slot(std::size_t i) const;
     void fill_slot(std::size_t i) const;
+    void note_what_probes_know(bool from_maps);
 
     ProbeSetManifest manifest_;
     std::string folder_;
@@ -161,6 +169,7 @@ private:
     std::shared_ptr<ProbeSlots> slots_;
     struct RadianceMipCache;
     std::shared_ptr<RadianceMipCache> radiance_mips_;
+    std::vector<std::uint8_t> knows_nothing_; // per probe: 1 when every texel is unknown
 };
 
 } // namespace lfprobe
