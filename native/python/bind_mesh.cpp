@@ -378,6 +378,63 @@ void bind_mesh(py::module_& m) {
         "Job's result is {rays, points, seconds}. horizontal_fov < 360 sweeps only the azimuths "
         "[horizontal_start, horizontal_start + horizontal_fov) degrees (from +X toward +Y), a "
         "partial sweep.");
+
+    m.def(
+        "start_simulate_scans",
+        [](MeshArg mesh, const std::vector<std::vector<double>>& positions, double step_deg,
+           double noise_mm, double vertical_fov, const std::vector<std::uint64_t>& seeds,
+           double horizontal_fov, double horizontal_start) {
+            if (!seeds.empty() && seeds.size() != positions.size()) {
+                throw InputError("simulated scans: give one seed per scanner position, or none");
+            }
+            std::vector<ScannerSettings> scanners;
+            for (std::size_t k = 0; k < positions.size(); ++k) {
+                ScannerSettings s;
+                s.position = dvec3_from(positions[k], "scanner position");
+                s.step_deg = step_deg;
+                s.noise_mm = noise_mm;
+                s.vertical_fov_deg = vertical_fov;
+                s.horizontal_fov_deg = horizontal_fov;
+                s.horizontal_start_deg = horizontal_start;
+                s.seed = seeds.empty() ? k + 1 : seeds[k];
+                scanners.push_back(s);
+            }
+            struct Scanned {
+                PointCloud cloud;
+                std::vector<ScanStats> stats;
+            };
+            return std::make_unique<Job>(
+                std::function<Scanned(Progress&)>([=](Progress& progress) {
+                    progress.begin_stage("loading mesh", 1);
+                    const MeshHandle h = resolve(mesh);
+                    Scanned scanned;
+                    scanned.cloud =
+                        simulate_scans_cloud(*h->scene, scanners, &progress, &scanned.stats);
+                    return scanned;
+                }),
+                std::function<py::object(Scanned &&)>([](Scanned&& scanned) -> py::object {
+                    py::list stats;
+                    for (const ScanStats& st : scanned.stats) {
+                        py::dict d;
+                        d["rays"] = st.rays;
+                        d["points"] = st.points;
+                        d["seconds"] = st.seconds;
+                        stats.append(d);
+                    }
+                    py::dict d;
+                    d["cloud"] = std::make_shared<PointCloud>(std::move(scanned.cloud));
+                    d["stats"] = stats;
+                    return d;
+                }));
+        },
+        py::arg("mesh"), py::arg("positions"), py::arg("step_deg") = 0.5, py::arg("noise_mm") = 2.0,
+        py::arg("vertical_fov") = 300.0, py::arg("seeds") = std::vector<std::uint64_t>{},
+        py::arg("horizontal_fov") = ScannerSettings{}.horizontal_fov_deg,
+        py::arg("horizontal_start") = ScannerSettings{}.horizontal_start_deg,
+        "Start simulated scans of `mesh` from each of `positions` (world), as start_simulate_scan "
+        "takes them (seeds: one per position; none: 1, 2, ...), into one PointCloud with no file "
+        "between: the cloud load_scans gives of their files, but for the positions' 6 decimals. "
+        "The Job's result is {cloud, stats: one {rays, points, seconds} per scanner}.");
 }
 
 } // namespace lfprobe::python

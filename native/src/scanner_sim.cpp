@@ -4,7 +4,12 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <numbers>
+#include <string>
+#include <vector>
+
+#include <glm/common.hpp>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -12,6 +17,7 @@
 #include "lfprobe/color.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/probe_exr.hpp"
+#include "lfprobe/world_offset.hpp"
 
 namespace lfprobe {
 
@@ -178,6 +184,66 @@ ScanStats write_simulated_scan(const EmbreeScene& scene, const ScannerSettings& 
     }
     write_file_atomically(path, text);
     return stats;
+}
+
+PointCloud simulate_scans_cloud(const EmbreeScene& scene,
+                                const std::vector<ScannerSettings>& scanners, Progress* progress,
+                                std::vector<ScanStats>* stats) {
+    std::vector<std::vector<SimulatedPoint>> scans;
+    glm::dvec3 lo(std::numeric_limits<double>::infinity());
+    glm::dvec3 hi(-std::numeric_limits<double>::infinity());
+    std::size_t total = 0;
+    for (const ScannerSettings& settings : scanners) {
+        ScanStats scan_stats;
+        scans.push_back(simulate_scan(scene, settings, progress, &scan_stats));
+        for (const SimulatedPoint& q : scans.back()) {
+            lo = glm::min(lo, q.position);
+            hi = glm::max(hi, q.position);
+        }
+        total += scans.back().size();
+        if (stats != nullptr) {
+            stats->push_back(scan_stats);
+        }
+    }
+    PointCloud cloud;
+    cloud.world_offset = world_offset_for_bounds(lo, hi);
+    cloud.positions.resize(total);
+    cloud.colors.resize(total);
+    cloud.scan_index.resize(total);
+    const std::array<float, 256>& decode = srgb8_to_linear_table();
+    // The byte write_simulated_scan writes for a linear channel.
+    const auto byte = [](float linear) {
+        const float s = linear_to_srgb(std::clamp(linear, 0.0f, 1.0f));
+        return static_cast<std::size_t>(std::lround(s * 255.0f));
+    };
+    std::size_t first = 0;
+    for (std::size_t k = 0; k < scans.size(); ++k) {
+        if (progress != nullptr) {
+            progress->throw_if_cancelled();
+        }
+        std::vector<SimulatedPoint>& points = scans[k];
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1 << 14),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t i = r.begin(); i < r.end(); ++i) {
+                                  const SimulatedPoint& q = points[i];
+                                  cloud.positions[first + i] =
+                                      glm::vec3(q.position - cloud.world_offset);
+                                  cloud.colors[first + i] =
+                                      glm::vec3(decode[byte(q.color.x)], decode[byte(q.color.y)],
+                                                decode[byte(q.color.z)]);
+                                  cloud.scan_index[first + i] = static_cast<std::uint32_t>(k);
+                              }
+                          });
+        ScanSource source;
+        source.path = "simulated scan " + std::to_string(k);
+        source.point_count = points.size();
+        source.scanner = scanners[k].position - cloud.world_offset;
+        source.has_scanner = true;
+        cloud.scans.push_back(source);
+        first += points.size();
+        points = std::vector<SimulatedPoint>(); // freed as soon as it is in the cloud
+    }
+    return cloud;
 }
 
 } // namespace lfprobe

@@ -192,3 +192,28 @@ def test_a_merged_export_gives_the_bake_of_its_separate_stations(native, shared_
             dots = np.sum(ref["normal"][both] * got["normal"][both], axis=-1)
             assert np.mean(dots > 0.9) >= 0.99, name  # normals face the same (right) station
             assert surface_ref.any()
+
+
+def test_simulated_scans_streamed_as_a_cloud_are_the_cloud_their_files_give(native, shared_data, tmp_path):
+    """start_simulate_scans hands the scans over as one cloud with no file between: the same
+    points, colours, scans and frame as start_simulate_scan's files read back, but for the files'
+    6 decimals."""
+    folder = os.path.join(shared_data, "meshes", "cornell_box")
+    mesh = native.load_mesh(os.path.join(folder, sorted(f for f in os.listdir(folder) if f.endswith(".obj"))[0]))
+    low, high = np.array(mesh.bounds[0]), np.array(mesh.bounds[1])
+    centre, size = 0.5 * (low + high), high - low
+    stations = [list(centre + [-0.2 * size[0], 0, 0.25 * size[2]]), list(centre + [0.2 * size[0], 0, 0.2 * size[2]])]
+    files = []
+    for k, at in enumerate(stations):
+        files.append(str(tmp_path / f"scan{k}.xyz"))
+        native.start_simulate_scan(mesh, files[-1], at, step_deg=2.0, noise_mm=1.0, seed=k + 1).run()
+    from_files = pipeline.load_scans(files, stations, cache_dir="")
+    streamed = native.start_simulate_scans(mesh, stations, step_deg=2.0, noise_mm=1.0).run()
+    cloud = streamed["cloud"]
+    assert [s["points"] for s in streamed["stats"]] == [s["points"] for s in from_files.scans]
+    assert cloud.world_offset == from_files.world_offset
+    assert np.array_equal(cloud.scan_index, from_files.scan_index)
+    assert np.array_equal(cloud.colors, from_files.colors)
+    assert np.abs(cloud.positions - from_files.positions).max() < 2e-6
+    for a, b in zip(cloud.scans, from_files.scans):
+        assert np.allclose(a["scanner"], b["scanner"], atol=1e-6)

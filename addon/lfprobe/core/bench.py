@@ -14,6 +14,7 @@ import numpy as np
 
 from . import native
 from .bench_formats import best_of, library_parse_benchmark
+from .pipeline import load_scans
 from .probe_set import PAPER_BYTES_PER_2048_PROBE, coarse_level_bytes, summarize
 
 # The project's shared test data: LFPROBE_SHARED_DATA, else ../shared/data beside the checkout.
@@ -250,6 +251,40 @@ def hierarchy_benchmark(points: int, resolution: int, lods: list, reference: dic
     return row
 
 
+def simulated_scan_benchmark(points: int, tmp: str) -> dict:
+    """One full sweep of the benchmark room from its middle at the step that gives about
+    `points` rays (every ray meets a wall): streamed into a cloud (start_simulate_scans) and
+    written as .xyz then parsed (start_simulate_scan, load_scans), the same scan both ways."""
+    _native = native.load()
+    mesh_path = os.path.join(tmp, "sim_room.obj")
+    write_room_obj(mesh_path)
+    mesh = _native.load_mesh(mesh_path)
+    # A sweep takes 360/step azimuths of elevations from -60° to 90° (vertical fov 300°).
+    step = float(np.sqrt(360.0 * 150.0 / points))
+    at = [1.5, 3.0, 1.4]
+    start = time.perf_counter()
+    streamed = _native.start_simulate_scans(mesh, [at], step_deg=step, noise_mm=1.0).run()
+    streamed_seconds = time.perf_counter() - start
+    count = len(streamed["cloud"])
+    scan_seconds = streamed["stats"][0]["seconds"]
+    del streamed
+    path = os.path.join(tmp, "sim_scan.xyz")
+    start = time.perf_counter()
+    _native.start_simulate_scan(mesh, path, at, step_deg=step, noise_mm=1.0).run()
+    write_seconds = time.perf_counter() - start
+    size = os.path.getsize(path)
+    start = time.perf_counter()
+    parsed = load_scans([path], [at], cache_dir="")
+    parse_seconds = time.perf_counter() - start
+    if len(parsed) != count:
+        raise RuntimeError(f"the streamed scan has {count} points, its file {len(parsed)}")
+    del parsed
+    os.remove(path)
+    return {"points": count, "step_deg": step, "streamed_seconds": streamed_seconds,
+            "scan_seconds": scan_seconds, "write_seconds": write_seconds, "parse_seconds": parse_seconds,
+            "file_seconds": write_seconds + parse_seconds, "file_bytes": size}
+
+
 def write_results(path: str, results: dict) -> None:
     """A benchmark's figures as JSON, where --json asks for them (no file otherwise)."""
     if path:
@@ -282,6 +317,15 @@ def main(args) -> int:
             )
         results["parsing"] = rows
         os.remove(generated)
+
+        if args.scan_points > 0:
+            print(f"\n== a simulated scan of about {args.scan_points:,} points (28 M: a station at the "
+                  f"paper's density): streamed into a cloud vs written as .xyz and parsed, this run ==")
+            results["simulated_scan"] = s = simulated_scan_benchmark(args.scan_points, tmp)
+            print(f"  {s['points']:,} points: streamed into a cloud in {s['streamed_seconds']:.2f} s "
+                  f"(scanning {s['scan_seconds']:.2f} s); through a {s['file_bytes'] / 2**30:.2f} GiB .xyz "
+                  f"{s['file_seconds']:.2f} s (scan and write {s['write_seconds']:.2f} s, parse "
+                  f"{s['parse_seconds']:.2f} s): streaming is {s['file_seconds'] / s['streamed_seconds']:.1f}× faster")
 
         print("\n== E57 and LAS/LAZ: lfprobe's readers vs the libraries' own, same file, this run ==")
         results["parsing_library_formats"] = library_parse_benchmark(os.path.dirname(pump), tmp)

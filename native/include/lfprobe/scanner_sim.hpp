@@ -13,10 +13,12 @@
 
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include <glm/vec3.hpp>
 
 #include "lfprobe/embree_scene.hpp"
+#include "lfprobe/point_cloud.hpp"
 #include "lfprobe/progress.hpp"
 
 namespace lfprobe {
@@ -56,5 +58,17 @@ struct SimulatedPoint {
 // with 6 decimals. Returns the stats.
 ScanStats write_simulated_scan(const EmbreeScene& scene, const ScannerSettings& settings,
                                const std::string& path, Progress* progress = nullptr);
+
+// Simulated scans from `scanners` as one cloud, with no file between: each point as
+// write_simulated_scan's file reads back (load_scans), but for the 6 decimals of the positions,
+// which are kept whole here. Colours are 8-bit sRGB decoded by the readers' table, the local
+// frame is chosen by world_offset_for_bounds over every point, and each scanner is one scan
+// with its position. What the report bakes from: at the paper's density a scan's text file
+// would take gigabytes and as long to parse as to scan. `stats`, when given, gets one entry
+// per scanner.
+[[nodiscard]] PointCloud simulate_scans_cloud(const EmbreeScene& scene,
+                                              const std::vector<ScannerSettings>& scanners,
+                                              Progress* progress = nullptr,
+                                              std::vector<ScanStats>* stats = nullptr);
 
 } // namespace lfprobe

@@ -388,6 +388,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="points in the generated file for the parsing comparison")
     bench.add_argument("--splat-points", default="1000000,10000000,30000000",
                        help="render: cloud sizes for the splatting comparison")
+    bench.add_argument("--scan-points", type=int, default=28_000_000,
+                       help="core: points of the simulated scan streamed into a cloud and written as "
+                            "a file (default 28 M, a station at the paper's density; 0: skip)")
     bench.add_argument("--hierarchy-points", default="10000000,100000000",
                        help="core: cloud sizes for the point hierarchy's bake comparison "
                             "(comma-separated; empty: skip)")

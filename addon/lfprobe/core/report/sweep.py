@@ -29,7 +29,6 @@ class Density:
     points: int
     scan_seconds: float
     cloud: object
-    paths: List[str]
 
     @property
     def label(self) -> str:
@@ -79,22 +78,21 @@ def scaled_grid(ctx: RunContext, factor: float) -> Tuple[List[float], List[float
 
 
 def simulate_scans(ctx: RunContext) -> List[Density]:
-    """Scans the mesh from every scanner position at each of the preset's densities."""
+    """Scans the mesh from every scanner position at each of the preset's densities, straight
+    into a cloud: no .xyz file between (at the paper's density one would take gigabytes and as
+    long to parse as the scan takes)."""
     s, p = ctx.scene, ctx.preset
     steps = sorted({max(s.scan["step_deg"] * f, p.min_scan_step_deg) for f in p.scan_step_factors})
     densities = []
     for step in steps:
-        paths, seconds = [], 0.0
-        for index, scanner in enumerate(s.scanners):
-            path = ctx.work_path("scans", f"scan_{step:g}deg_{index}.xyz")
-            stats = ctx.native.start_simulate_scan(
-                ctx.mesh, path, list(scanner), step_deg=step, noise_mm=s.scan["noise_mm"],
-                vertical_fov=s.scan["vertical_fov"], seed=index + 1).run()
-            seconds += stats["seconds"]
-            paths.append(path)
-        cloud = pipeline.load_scans(paths, s.scanners, cache_dir="")
-        density = Density(step, len(cloud), seconds, cloud, paths)
-        ctx.log(f"  scan at {step:g}°: {density.points:,} points from {len(paths)} scanner(s) in {seconds:.2f} s")
+        scanned = ctx.native.start_simulate_scans(
+            ctx.mesh, [list(scanner) for scanner in s.scanners], step_deg=step,
+            noise_mm=s.scan["noise_mm"], vertical_fov=s.scan["vertical_fov"],
+            seeds=[index + 1 for index in range(len(s.scanners))]).run()
+        cloud = scanned["cloud"]
+        seconds = sum(stats["seconds"] for stats in scanned["stats"])
+        density = Density(step, len(cloud), seconds, cloud)
+        ctx.log(f"  scan at {step:g}°: {density.points:,} points from {len(s.scanners)} scanner(s) in {seconds:.2f} s")
         densities.append(density)
     return densities
 
