@@ -183,6 +183,30 @@ Mesh mesh_from_arrays(
     return mesh;
 }
 
+// A simulated scanner's settings as start_simulate_scan and start_simulate_scans take them.
+ScannerSettings scanner_settings(const std::vector<double>& position, double step_deg,
+                                 double noise_mm, double vertical_fov, std::uint64_t seed,
+                                 double horizontal_fov, double horizontal_start) {
+    ScannerSettings s;
+    s.position = dvec3_from(position, "scanner position");
+    s.step_deg = step_deg;
+    s.noise_mm = noise_mm;
+    s.vertical_fov_deg = vertical_fov;
+    s.horizontal_fov_deg = horizontal_fov;
+    s.horizontal_start_deg = horizontal_start;
+    s.seed = seed;
+    return s;
+}
+
+// A scan's figures as Python sees them.
+py::dict scan_stats_dict(const ScanStats& st) {
+    py::dict d;
+    d["rays"] = st.rays;
+    d["points"] = st.points;
+    d["seconds"] = st.seconds;
+    return d;
+}
+
 } // namespace
 
 void bind_mesh(py::module_& m) {
@@ -348,27 +372,16 @@ void bind_mesh(py::module_& m) {
         [](MeshArg mesh, const std::string& out_path, const std::vector<double>& position,
            double step_deg, double noise_mm, double vertical_fov, std::uint64_t seed,
            double horizontal_fov, double horizontal_start) {
-            ScannerSettings s;
-            s.position = dvec3_from(position, "scanner position");
-            s.step_deg = step_deg;
-            s.noise_mm = noise_mm;
-            s.vertical_fov_deg = vertical_fov;
-            s.horizontal_fov_deg = horizontal_fov;
-            s.horizontal_start_deg = horizontal_start;
-            s.seed = seed;
+            const ScannerSettings s = scanner_settings(position, step_deg, noise_mm, vertical_fov,
+                                                       seed, horizontal_fov, horizontal_start);
             return std::make_unique<Job>(
                 std::function<ScanStats(Progress&)>([=](Progress& progress) {
                     progress.begin_stage("loading mesh", 1);
                     const MeshHandle h = resolve(mesh);
                     return write_simulated_scan(*h->scene, s, out_path, &progress);
                 }),
-                std::function<py::object(ScanStats &&)>([](ScanStats&& st) -> py::object {
-                    py::dict d;
-                    d["rays"] = st.rays;
-                    d["points"] = st.points;
-                    d["seconds"] = st.seconds;
-                    return d;
-                }));
+                std::function<py::object(ScanStats &&)>(
+                    [](ScanStats&& st) -> py::object { return scan_stats_dict(st); }));
         },
         py::arg("mesh"), py::arg("out_path"), py::arg("position"), py::arg("step_deg") = 0.5,
         py::arg("noise_mm") = 2.0, py::arg("vertical_fov") = 300.0, py::arg("seed") = 1,
@@ -389,15 +402,9 @@ void bind_mesh(py::module_& m) {
             }
             std::vector<ScannerSettings> scanners;
             for (std::size_t k = 0; k < positions.size(); ++k) {
-                ScannerSettings s;
-                s.position = dvec3_from(positions[k], "scanner position");
-                s.step_deg = step_deg;
-                s.noise_mm = noise_mm;
-                s.vertical_fov_deg = vertical_fov;
-                s.horizontal_fov_deg = horizontal_fov;
-                s.horizontal_start_deg = horizontal_start;
-                s.seed = seeds.empty() ? k + 1 : seeds[k];
-                scanners.push_back(s);
+                scanners.push_back(scanner_settings(positions[k], step_deg, noise_mm, vertical_fov,
+                                                    seeds.empty() ? k + 1 : seeds[k],
+                                                    horizontal_fov, horizontal_start));
             }
             struct Scanned {
                 PointCloud cloud;
@@ -415,11 +422,7 @@ void bind_mesh(py::module_& m) {
                 std::function<py::object(Scanned &&)>([](Scanned&& scanned) -> py::object {
                     py::list stats;
                     for (const ScanStats& st : scanned.stats) {
-                        py::dict d;
-                        d["rays"] = st.rays;
-                        d["points"] = st.points;
-                        d["seconds"] = st.seconds;
-                        stats.append(d);
+                        stats.append(scan_stats_dict(st));
                     }
                     py::dict d;
                     d["cloud"] = std::make_shared<PointCloud>(std::move(scanned.cloud));

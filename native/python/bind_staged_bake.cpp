@@ -56,6 +56,29 @@ py::dict staged_dict(const StagedProbe& staged) {
     return d;
 }
 
+// Probe positions (the local frame, as cloud_bake_manifest gives them) as a placement.
+std::shared_ptr<const ProbePlacement>
+placement_of(const std::vector<std::vector<double>>& positions) {
+    std::vector<glm::dvec3> local;
+    for (const auto& p : positions) {
+        local.push_back(dvec3_from(p, "probe position"));
+    }
+    return std::make_shared<const ProbePlacement>(ProbePlacement::from_positions(local));
+}
+
+// A staged bake's Job: `bake` runs in the background; its result is one staged_dict a probe.
+std::unique_ptr<Job> staged_bake_job(std::function<std::vector<StagedProbe>(Progress&)> bake) {
+    return std::make_unique<Job>(std::move(bake),
+                                 std::function<py::object(std::vector<StagedProbe> &&)>(
+                                     [](std::vector<StagedProbe>&& staged) -> py::object {
+                                         py::list out;
+                                         for (const StagedProbe& s : staged) {
+                                             out.append(staged_dict(s));
+                                         }
+                                         return out;
+                                     }));
+}
+
 } // namespace
 
 void bind_staged_bake(py::module_& m) {
@@ -190,25 +213,10 @@ void bind_staged_bake(py::module_& m) {
         "start_bake_staged_probes",
         [](std::shared_ptr<CloudBakeSource> source, std::vector<std::vector<double>> positions,
            std::vector<std::size_t> indices, const std::string& staging) {
-            std::vector<glm::dvec3> local;
-            for (const auto& p : positions) {
-                local.push_back(dvec3_from(p, "probe position"));
-            }
-            auto placement =
-                std::make_shared<const ProbePlacement>(ProbePlacement::from_positions(local));
-            return std::make_unique<Job>(
-                std::function<std::vector<StagedProbe>(Progress&)>(
-                    [source, placement, indices, staging](Progress& progress) {
-                        return bake_staged_probes(*source, *placement, indices, staging, &progress);
-                    }),
-                std::function<py::object(std::vector<StagedProbe> &&)>(
-                    [](std::vector<StagedProbe>&& staged) -> py::object {
-                        py::list out;
-                        for (const StagedProbe& s : staged) {
-                            out.append(staged_dict(s));
-                        }
-                        return out;
-                    }));
+            auto placement = placement_of(positions);
+            return staged_bake_job([source, placement, indices, staging](Progress& progress) {
+                return bake_staged_probes(*source, *placement, indices, staging, &progress);
+            });
         },
         py::arg("source"), py::arg("positions"), py::arg("indices"), py::arg("staging"),
         "Start baking the probes `indices` (of `positions`, the local frame, as "
@@ -221,26 +229,10 @@ void bind_staged_bake(py::module_& m) {
         [](std::shared_ptr<SpatialCloud> cloud, std::vector<std::vector<double>> positions,
            std::vector<std::size_t> indices, const std::string& staging, const py::dict& settings) {
             const BakeSettings bake = cloud_bake_options_from(settings).settings;
-            std::vector<glm::dvec3> local;
-            for (const auto& p : positions) {
-                local.push_back(dvec3_from(p, "probe position"));
-            }
-            auto placement =
-                std::make_shared<const ProbePlacement>(ProbePlacement::from_positions(local));
-            return std::make_unique<Job>(
-                std::function<std::vector<StagedProbe>(Progress&)>(
-                    [cloud, bake, placement, indices, staging](Progress& progress) {
-                        return bake_staged_probes(*cloud, bake, *placement, indices, staging,
-                                                  &progress);
-                    }),
-                std::function<py::object(std::vector<StagedProbe> &&)>(
-                    [](std::vector<StagedProbe>&& staged) -> py::object {
-                        py::list out;
-                        for (const StagedProbe& s : staged) {
-                            out.append(staged_dict(s));
-                        }
-                        return out;
-                    }));
+            auto placement = placement_of(positions);
+            return staged_bake_job([cloud, bake, placement, indices, staging](Progress& progress) {
+                return bake_staged_probes(*cloud, bake, *placement, indices, staging, &progress);
+            });
         },
         py::arg("source"), py::arg("positions"), py::arg("indices"), py::arg("staging"),
         py::arg("settings"),

@@ -16,6 +16,7 @@
 #include "lfprobe/cloud_bake.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/spatial_cloud.hpp"
+#include "walls_cloud.hpp"
 
 namespace {
 
@@ -28,28 +29,10 @@ struct Genuine {
     std::string bytes;
 };
 
-// Two small walls at right angles, seen from a scanner: a cloud with a hierarchy of levels.
-std::shared_ptr<const lfprobe::PointCloud> small_cloud() {
-    auto cloud = std::make_shared<lfprobe::PointCloud>();
-    for (int i = 0; i < 20; ++i) {
-        for (int j = 0; j < 20; ++j) {
-            const float u = 0.05f * static_cast<float>(i);
-            const float v = 0.05f * static_cast<float>(j);
-            cloud->positions.emplace_back(1.0f, u, v);
-            cloud->positions.emplace_back(u, 1.0f, v);
-            cloud->colors.emplace_back(0.8f, 0.2f, 0.1f);
-            cloud->colors.emplace_back(0.1f, 0.3f, 0.9f);
-        }
-    }
-    cloud->scan_index.assign(cloud->positions.size(), 0);
-    cloud->scans.push_back({"walls", cloud->positions.size(), glm::dvec3(0.0), true});
-    return cloud;
-}
-
 const Genuine& genuine() {
     using namespace lfprobe;
     static const Genuine g = [] {
-        const CloudBakeSource source = prepare_cloud_bake(small_cloud(), {}, {});
+        const CloudBakeSource source = prepare_cloud_bake(fuzz::walls_cloud(), {}, {});
         const std::optional<SpatialCloudEntry> entry =
             write_spatial_cloud_of(source, (fuzz::scratch_folder() / "spatial").string());
         fuzz::expect(entry.has_value(), "the genuine cloud has no spatial cloud");
