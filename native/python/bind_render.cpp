@@ -62,8 +62,10 @@ struct Fidelity {
 
 RenderSettings render_settings(const std::string& mode, double thickness, bool use_coarse_levels,
                                int tile_size, const Fidelity& fidelity = {},
-                               double fallback_thickness = TraceSettings{}.fallback_thickness) {
+                               double fallback_thickness = TraceSettings{}.fallback_thickness,
+                               int max_probes_per_ray = FieldTraceSettings{}.max_probes_per_ray) {
     RenderSettings settings;
+    settings.trace.max_probes_per_ray = max_probes_per_ray;
     settings.trace.mode = field_mode_from_name(mode);
     settings.trace.probe.thickness = thickness;
     settings.trace.probe.fallback_thickness = fallback_thickness;
@@ -173,11 +175,11 @@ void bind_render(py::module_& m) {
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
                const std::string& mode, int threads, double thickness, bool use_coarse_levels,
                int tile_size, int spp, const std::string& filter, int blend,
-               double fallback_thickness) {
+               double fallback_thickness, int max_probes_per_ray) {
                 const Camera cam = camera_from(camera);
                 const RenderSettings settings =
                     render_settings(mode, thickness, use_coarse_levels, tile_size,
-                                    {spp, filter, blend}, fallback_thickness);
+                                    {spp, filter, blend}, fallback_thickness, max_probes_per_ray);
                 using Result = std::pair<RenderedImage, RenderStats>;
                 return std::make_unique<Job>(
                     std::function<Result(Progress&)>([=](Progress& progress) {
@@ -198,6 +200,7 @@ void bind_render(py::module_& m) {
             py::arg("tile_size") = RenderSettings{}.tile_size, py::arg("spp") = Fidelity{}.spp,
             py::arg("filter") = Fidelity{}.filter, py::arg("blend") = Fidelity{}.blend,
             py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
+            py::arg("max_probes_per_ray") = FieldTraceSettings{}.max_probes_per_ray,
             "Start tracing a view in the background (the Blender engine's F12): a Job with "
             "progress in pixels, cancel(), and result() = (image dict, stats dict) as render() "
             "returns.")
@@ -206,11 +209,11 @@ void bind_render(py::module_& m) {
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
                const std::string& output, const std::string& mode, int threads, double thickness,
                bool use_coarse_levels, int tile_size, int spp, const std::string& filter, int blend,
-               double fallback_thickness) {
+               double fallback_thickness, int max_probes_per_ray) {
                 const Camera cam = camera_from(camera);
                 const RenderSettings settings =
                     render_settings(mode, thickness, use_coarse_levels, tile_size,
-                                    {spp, filter, blend}, fallback_thickness);
+                                    {spp, filter, blend}, fallback_thickness, max_probes_per_ray);
                 RenderStats stats;
                 RenderedImage image;
                 {
@@ -228,22 +231,26 @@ void bind_render(py::module_& m) {
             py::arg("spp") = Fidelity{}.spp, py::arg("filter") = Fidelity{}.filter,
             py::arg("blend") = Fidelity{}.blend,
             py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
+            py::arg("max_probes_per_ray") = FieldTraceSettings{}.max_probes_per_ray,
             "Trace a view (camera: a JSON path or text); returns (image dict, stats dict) and "
             "writes the EXR when output is given. threads=0 uses every core. spp: samples per "
             "pixel (1 or a square; colour and coverage averaged, the rest from the pixel "
             "centre); filter: \"nearest\" or \"bilinear\" (a HIT's colour from its texel or "
             "interpolated over the same surface); blend: probes a HIT's colour is blended from "
-            "(1: the answering probe alone).");
+            "(1: the answering probe alone); max_probes_per_ray: at most that many probes asked "
+            "about a "
+            "ray (0: no bound; a bound is not exact).");
 
     m.def(
         "start_render",
         [](const std::string& folder, const std::string& camera, const std::string& output,
            const std::string& mode, int threads, double thickness, bool use_coarse_levels,
            const py::object& storage, double distance_step, int spp, const std::string& filter,
-           int blend, double fallback_thickness) {
+           int blend, double fallback_thickness, int max_probes_per_ray) {
             const Camera cam = camera_from(camera);
-            const RenderSettings settings = render_settings(
-                mode, thickness, use_coarse_levels, 32, {spp, filter, blend}, fallback_thickness);
+            const RenderSettings settings =
+                render_settings(mode, thickness, use_coarse_levels, 32, {spp, filter, blend},
+                                fallback_thickness, max_probes_per_ray);
             const std::optional<ProbeStorage> chosen = storage_from(storage, distance_step);
             return std::make_unique<Job>(
                 std::function<RenderStats(Progress&)>([=](Progress& progress) {
@@ -261,6 +268,7 @@ void bind_render(py::module_& m) {
         py::arg("distance_step") = 0.0, py::arg("spp") = Fidelity{}.spp,
         py::arg("filter") = Fidelity{}.filter, py::arg("blend") = Fidelity{}.blend,
         py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
+        py::arg("max_probes_per_ray") = FieldTraceSettings{}.max_probes_per_ray,
         "Start rendering the probe set in `folder` from `camera` (JSON path or text) into the EXR "
         "`output`; the Job's result is the stats dict. storage as for ProbeField.load.");
 

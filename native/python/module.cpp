@@ -210,6 +210,7 @@ py::dict defaults_dict() {
     trace["fallback_thickness"] = render.trace.probe.fallback_thickness;
     trace["use_coarse_levels"] = render.trace.probe.use_coarse_levels;
     trace["max_probes"] = render.trace.max_probes;
+    trace["max_probes_per_ray"] = render.trace.max_probes_per_ray;
     trace["filter"] = radiance_filter_name(render.trace.filter);
     trace["blend"] = render.trace.blend;
     trace["spp"] = render.samples_per_pixel;

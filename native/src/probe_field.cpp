@@ -120,8 +120,14 @@ struct FieldQuery {
                fallback.fallback_texel);
     }
 
+    // FieldTraceSettings::max_probes_per_ray: asked that many, the ray stops being passed on.
+    [[nodiscard]] bool out_of_probes() const {
+        return max_probes > 0 && result.probes_tried >= static_cast<std::uint32_t>(max_probes);
+    }
+
     ProbeTraceResult fallback;
     std::size_t fallback_probe = 0;
+    int max_probes = 0;
 };
 
 // Candidate probes ordered by squared distance to `point`, ties by index (deterministic).
@@ -148,6 +154,9 @@ bool ask_in_passes(FieldQuery& query, TriedProbes& tried, const Candidate* candi
             }
             if (!tried.worth_asking(index, std::max(query.ray.t_min, query.result.free_until))) {
                 continue;
+            }
+            if (query.out_of_probes()) {
+                return false;
             }
             if (query.ask(index)) {
                 return true;
@@ -412,7 +421,7 @@ FieldTraceResult ProbeField::trace(const Ray& ray, const FieldTraceSettings& set
 
 FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
                                            const FieldTraceSettings& settings) const {
-    FieldQuery query{*this, ray, settings.probe, {}, {}, 0};
+    FieldQuery query{*this, ray, settings.probe, {}, {}, 0, settings.max_probes_per_ray};
     query.result.free_until = ray.t_min;
     const std::size_t wanted =
         std::min(probe_count(), static_cast<std::size_t>(std::max(settings.max_probes, 1)));
@@ -446,7 +455,7 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
     if (!walk.meets_grid()) {
         return trace_nearest(ray, settings); // the ray never meets the grid's box
     }
-    FieldQuery query{*this, ray, settings.probe, {}, {}, 0};
+    FieldQuery query{*this, ray, settings.probe, {}, {}, 0, settings.max_probes_per_ray};
     query.result.free_until = ray.t_min;
     TriedProbes tried;
     while (const std::optional<GridCellSpan> span = walk.next()) {
@@ -472,6 +481,9 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
             if (ask_in_passes(query, tried, corners.data(), useful,
                               settings.skip_probes_that_know_nothing)) {
                 return query.result;
+            }
+            if (query.out_of_probes()) {
+                break;
             }
         }
     }

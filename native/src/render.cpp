@@ -38,6 +38,7 @@ nlohmann::json render_settings_json(const RenderSettings& settings) {
                           {"max_probes", settings.trace.max_probes},
                           {"thickness", p.thickness},
                           {"fallback_thickness", p.fallback_thickness},
+                          {"max_probes_per_ray", settings.trace.max_probes_per_ray},
                           {"thickness_texels", p.thickness_texels},
                           {"use_coarse_levels", p.use_coarse_levels},
                           {"eye_at_probe_distance", p.eye_at_probe_distance},
@@ -289,6 +290,10 @@ void require_valid_trace_settings(const RenderSettings& settings) {
         throw InputError(
             "render: fallback_thickness must be a finite number of metres, 0 or more (got " +
             std::to_string(t.fallback_thickness) + ")");
+    }
+    if (settings.trace.max_probes_per_ray < 0) {
+        throw InputError("render: max_probes_per_ray must be 0 (no bound) or more (got " +
+                         std::to_string(settings.trace.max_probes_per_ray) + ")");
     }
     if (!std::isfinite(t.thickness_texels) || t.thickness_texels < 0.0) {
         throw InputError("render: thickness_texels must be a finite number, 0 or more (got " +

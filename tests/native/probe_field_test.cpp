@@ -244,6 +244,14 @@ TEST(Grid, NearestCarriesTheProvenFreeDistanceToTheNextProbe) {
     EXPECT_EQ(r.probe, 1);
     EXPECT_EQ(r.probes_tried, 2u);
     EXPECT_NEAR(r.t, truth(room, ray), 0.02);
+    // A bound of one probe a ray stops the ray at probe a; two let probe b answer as before.
+    FieldTraceSettings bounded;
+    bounded.max_probes_per_ray = 1;
+    const FieldTraceResult one_probe = field.trace(ray, bounded);
+    EXPECT_EQ(one_probe.status, TraceStatus::Unknown);
+    EXPECT_EQ(one_probe.probes_tried, 1u);
+    bounded.max_probes_per_ray = 2;
+    EXPECT_EQ(field.trace(ray, bounded).t, r.t);
     // Probe b was asked from where probe a stopped, not from the start.
     Ray from_free = ray;
     from_free.t_min = only_a.free_until;
@@ -328,6 +336,13 @@ TEST(Grid, ACellWhoseProbesKnowNothingIsSkipped) {
     EXPECT_EQ(one.t, all.t);
     EXPECT_EQ(one.radiance, all.radiance);
     EXPECT_NEAR(one.t, truth(room, leaves), 0.02);
+    // Asking every probe but at most one a ray, the walk stops in the first cell: the probe
+    // that knows nothing was the one asked.
+    FieldTraceSettings bounded = ask_all;
+    bounded.max_probes_per_ray = 1;
+    const FieldTraceResult cut_short = field.trace(leaves, bounded);
+    EXPECT_EQ(cut_short.status, TraceStatus::Unknown);
+    EXPECT_EQ(cut_short.probes_tried, 1u);
 
     // Opened lazily from disk, the probes' manifest records say which know nothing, before
     // any probe is read; a ray that stays in the cell reads none.

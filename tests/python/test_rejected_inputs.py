@@ -47,6 +47,13 @@ def test_a_thickness_that_is_not_a_finite_length_exits_2(baked_set, tmp_path, op
     assert not (tmp_path / "view.exr").exists()
 
 
+def test_a_negative_bound_on_probes_per_ray_exits_2(baked_set, tmp_path):
+    result = run_cli("render", "--probes", baked_set, "--camera", _camera(tmp_path / "cam.json"),
+                     "--out", tmp_path / "view.exr", "--max-probes-per-ray=-1")
+    _assert_bad_input(result, "max_probes_per_ray")
+    assert not (tmp_path / "view.exr").exists()
+
+
 def _manifest_with(folder, change):
     path = folder / "manifest.json"
     manifest = json.loads(path.read_text())

@@ -59,6 +59,11 @@ struct FieldTraceSettings {
     // ray starts), and so the cells all of whose corners know nothing (false: ask them; the
     // same answer, only slower; for tests and measurements).
     bool skip_probes_that_know_nothing = true;
+    // At most this many probes are asked about one ray (0: as many as the walk reaches); a ray
+    // none of them answers is UNKNOWN, or a HIT on a fallback one of them kept. A bound trades
+    // answers for time where most rays find no answer (a partial scan's unseen parts): it is
+    // not exact, and its effect is measured, not assumed.
+    int max_probes_per_ray = 0;
 };
 
 struct FieldTraceResult {

@@ -193,6 +193,7 @@ def _cmd_render(args) -> int:
     job = _native.start_render(args.probes, args.camera, args.out, mode=args.mode,
                                threads=args.threads, thickness=args.thickness,
                                fallback_thickness=args.fallback_thickness,
+                               max_probes_per_ray=args.max_probes_per_ray,
                                storage=None if args.storage == "manifest" else args.storage,
                                distance_step=args.distance_step, **fidelity_options(args))
     stats = job.run(None if args.quiet else TerminalProgress())
@@ -341,6 +342,11 @@ def build_parser() -> argparse.ArgumentParser:
                         help="a ray that no probe answers meets the surface it stopped behind, if it came "
                              "within this distance of it (m; plus a texel footprint; at most --thickness: "
                              f"never; default {defaults.trace('fallback_thickness'):g})")
+    render.add_argument("--max-probes-per-ray", type=int, default=defaults.trace("max_probes_per_ray"),
+                        metavar="N",
+                        help="ask at most N probes about a ray (0: every probe the walk reaches, "
+                             "exact); a bound trades answers for time where most rays find none, "
+                             "such as a partial scan's unseen parts (default 0)")
     add_fidelity_arguments(render)
     render.add_argument("--json", action="store_true", help="print the stats as JSON")
     render.add_argument("--quiet", action="store_true")
