@@ -37,6 +37,7 @@ CloudBakeSource prepare_cloud_bake(std::shared_ptr<const PointCloud> cloud,
         key = prepared_cloud_key(*source.cloud, geometry_options, settings.lod_texels > 0.0f);
         entry = prepared_cloud_entry_path(key, cache_dir);
         source.cache_entry = entry;
+        source.key = key;
         if (std::optional<PreparedCloud> cached = read_prepared_cloud(entry, key)) {
             source.geometry = std::move(cached->geometry);
             source.hierarchy = std::move(cached->hierarchy);
@@ -132,7 +133,9 @@ std::optional<SpatialCloudEntry> write_spatial_cloud_of(const CloudBakeSource& s
         source.hierarchy.levels.empty()) {
         return std::nullopt;
     }
-    const PreparedCloudKey key = prepared_cloud_key(*source.cloud, source.geometry_options, true);
+    // The preparation's key where it had a cache folder (with lod_texels > 0, as here).
+    const PreparedCloudKey key =
+        source.key ? *source.key : prepared_cloud_key(*source.cloud, source.geometry_options, true);
     SpatialCloudEntry entry{spatial_cloud_entry_path(key, cache_dir), prepared_cloud_key_hex(key)};
     try {
         const SpatialCloud existing(entry.path, entry.key_hex);

@@ -143,15 +143,12 @@ struct Candidate {
 // where another had stopped (that one may now see further), up to a few passes. True when a
 // probe answered.
 bool ask_in_passes(FieldQuery& query, TriedProbes& tried, const Candidate* candidates,
-                   std::size_t count, bool skip_nothing) {
+                   std::size_t count) {
     constexpr int kMaxPasses = 4;
     for (int pass = 0; pass < kMaxPasses; ++pass) {
         const double before = query.result.free_until;
         for (std::size_t k = 0; k < count; ++k) {
             const std::size_t index = candidates[k].index;
-            if (skip_nothing && query.field.knows_nothing(index)) {
-                continue; // it would answer UNKNOWN where the ray starts, proving nothing
-            }
             if (!tried.worth_asking(index, std::max(query.ray.t_min, query.result.free_until))) {
                 continue;
             }
@@ -443,7 +440,15 @@ FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
     }
     std::sort_heap(best.begin(), best.begin() + static_cast<long>(kept));
     TriedProbes tried;
-    if (ask_in_passes(query, tried, best.data(), kept, settings.skip_probes_that_know_nothing)) {
+    // Probes that know nothing answer UNKNOWN where the ray starts, proving nothing: not asked
+    // (they still count among the `wanted` nearest, as when they were asked).
+    if (settings.skip_probes_that_know_nothing) {
+        kept = static_cast<std::size_t>(
+            std::remove_if(best.begin(), best.begin() + static_cast<long>(kept),
+                           [&](const Candidate& c) { return knows_nothing(c.index); }) -
+            best.begin());
+    }
+    if (ask_in_passes(query, tried, best.data(), kept)) {
         return query.result;
     }
     query.finish_unanswered();
@@ -478,8 +483,7 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
                 continue; // a cell whose probes know nothing: no one to ask
             }
             sort_candidates(corners.data(), useful);
-            if (ask_in_passes(query, tried, corners.data(), useful,
-                              settings.skip_probes_that_know_nothing)) {
+            if (ask_in_passes(query, tried, corners.data(), useful)) {
                 return query.result;
             }
             if (query.out_of_probes()) {

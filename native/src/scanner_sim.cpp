@@ -90,6 +90,12 @@ Pattern pattern_of(const ScannerSettings& s) {
     return p;
 }
 
+// The 8-bit sRGB value a simulated scan stores for a linear colour channel, as a scanner's file
+// holds it.
+int srgb_byte(float linear) {
+    return static_cast<int>(std::lround(linear_to_srgb(std::clamp(linear, 0.0f, 1.0f)) * 255.0f));
+}
+
 } // namespace
 
 std::vector<SimulatedPoint> simulate_scan(const EmbreeScene& scene, const ScannerSettings& settings,
@@ -173,13 +179,10 @@ ScanStats write_simulated_scan(const EmbreeScene& scene, const ScannerSettings& 
                       settings.horizontal_fov_deg, settings.horizontal_start_deg);
         text += line;
     }
-    auto byte = [](float linear) {
-        const float s = linear_to_srgb(std::clamp(linear, 0.0f, 1.0f));
-        return static_cast<int>(std::lround(s * 255.0f));
-    };
     for (const SimulatedPoint& q : points) {
         std::snprintf(line, sizeof line, "%.6f %.6f %.6f %d %d %d\n", q.position.x, q.position.y,
-                      q.position.z, byte(q.color.x), byte(q.color.y), byte(q.color.z));
+                      q.position.z, srgb_byte(q.color.x), srgb_byte(q.color.y),
+                      srgb_byte(q.color.z));
         text += line;
     }
     write_file_atomically(path, text);
@@ -211,11 +214,7 @@ PointCloud simulate_scans_cloud(const EmbreeScene& scene,
     cloud.colors.resize(total);
     cloud.scan_index.resize(total);
     const std::array<float, 256>& decode = srgb8_to_linear_table();
-    // The byte write_simulated_scan writes for a linear channel.
-    const auto byte = [](float linear) {
-        const float s = linear_to_srgb(std::clamp(linear, 0.0f, 1.0f));
-        return static_cast<std::size_t>(std::lround(s * 255.0f));
-    };
+    const auto byte = [](float linear) { return static_cast<std::size_t>(srgb_byte(linear)); };
     std::size_t first = 0;
     for (std::size_t k = 0; k < scans.size(); ++k) {
         if (progress != nullptr) {

@@ -15,6 +15,7 @@
 #include "lfprobe/local_geometry.hpp"
 #include "lfprobe/point_cloud.hpp"
 #include "lfprobe/point_hierarchy.hpp"
+#include "lfprobe/prepared_cloud_cache.hpp"
 #include "lfprobe/probe_bake.hpp"
 #include "lfprobe/probe_placement.hpp"
 #include "lfprobe/probe_set.hpp"
@@ -36,8 +37,10 @@ struct CloudBakeSource {
     // True when the geometry and the hierarchy were read from the prepared-cloud cache
     // (prepared_cloud_cache.hpp); normals_seconds is then the read.
     bool from_cache = false;
-    // The prepared-cloud cache entry read or written ("" without a cache folder).
+    // The prepared-cloud cache entry read or written ("" without a cache folder), and the key
+    // that names it (the spatial cloud is named by it too).
     std::string cache_entry;
+    std::optional<PreparedCloudKey> key;
 };
 
 // Estimates the cloud's local geometry and builds the hierarchy `settings` bake from, on all
