@@ -10,6 +10,7 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
 
 #include "lfprobe/probe_bake.hpp"
 
@@ -280,73 +281,79 @@ void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole,
 void pull_push(ProbeMap& map, const std::vector<std::uint8_t>& fill, int hole_fill_texels) {
     const int n = map.resolution;
     // Pull: level l texel (x, y) gathers the measured texels of level 0 in its 2^l block.
+    // levels[l - 1] is level l; level 0 is the map itself, read in place (a copy of it would be
+    // the pyramid's largest level, and the push never reads it). Every level's texel adds its
+    // four below in one fixed order, so each level is built a row per task.
     std::vector<PullLevel> levels;
-    PullLevel base;
-    base.resize(n);
-    for (std::size_t i = 0; i < map.texel_count(); ++i) {
-        const TexelState s = map.state(i);
-        if (s != TexelState::Surface) {
-            continue;
-        }
-        const float d = map.distance[i];
-        base.weight[i] = 1.0f;
-        base.sum_rgb[i] = map.radiance_at(i);
-        base.sum_normal[i] = map.normal_at(i);
-        base.sum_distance[i] = d;
-        base.min_distance[i] = d;
-        base.max_distance[i] = d;
-        base.min_rgb[i] = map.radiance_at(i);
-        base.min_normal[i] = map.normal_at(i);
-    }
-    levels.push_back(std::move(base));
-    while (levels.back().n > 1) {
-        const PullLevel& below = levels.back();
-        PullLevel up;
-        up.resize((below.n + 1) / 2);
-        const auto bn = static_cast<std::size_t>(below.n);
-        for (std::size_t y = 0; y < static_cast<std::size_t>(up.n); ++y) {
+    auto pull = [&](int below_n, PullLevel& up, auto&& add_below) {
+        up.resize((below_n + 1) / 2);
+        const auto bn = static_cast<std::size_t>(below_n);
+        tbb::parallel_for(0, up.n, [&](int row) {
+            const auto y = static_cast<std::size_t>(row);
             for (std::size_t x = 0; x < static_cast<std::size_t>(up.n); ++x) {
                 const std::size_t o = y * static_cast<std::size_t>(up.n) + x;
                 for (std::size_t dy = 0; dy < 2; ++dy) {
                     for (std::size_t dx = 0; dx < 2; ++dx) {
                         const std::size_t bx = 2 * x + dx;
                         const std::size_t by = 2 * y + dy;
-                        if (bx >= bn || by >= bn) {
-                            continue;
-                        }
-                        const std::size_t b = by * bn + bx;
-                        if (below.weight[b] <= 0.0f) {
-                            continue;
-                        }
-                        up.weight[o] += below.weight[b];
-                        up.sum_rgb[o] += below.sum_rgb[b];
-                        up.sum_normal[o] += below.sum_normal[b];
-                        up.sum_distance[o] += below.sum_distance[b];
-                        up.max_distance[o] = std::max(up.max_distance[o], below.max_distance[b]);
-                        if (below.min_distance[b] < up.min_distance[o]) {
-                            up.min_distance[o] = below.min_distance[b];
-                            up.min_rgb[o] = below.min_rgb[b];
-                            up.min_normal[o] = below.min_normal[b];
+                        if (bx < bn && by < bn) {
+                            add_below(up, o, by * bn + bx);
                         }
                     }
                 }
             }
-        }
+        });
+    };
+    {
+        PullLevel first;
+        pull(n, first, [&](PullLevel& up, std::size_t o, std::size_t b) {
+            if (map.state(b) != TexelState::Surface) {
+                return;
+            }
+            const float d = map.distance[b];
+            up.weight[o] += 1.0f;
+            up.sum_rgb[o] += map.radiance_at(b);
+            up.sum_normal[o] += map.normal_at(b);
+            up.sum_distance[o] += d;
+            up.max_distance[o] = std::max(up.max_distance[o], d);
+            if (d < up.min_distance[o]) {
+                up.min_distance[o] = d;
+                up.min_rgb[o] = map.radiance_at(b);
+                up.min_normal[o] = map.normal_at(b);
+            }
+        });
+        levels.push_back(std::move(first));
+    }
+    // A hole of K texels is bridged once blocks are 2K wide; no need to go further.
+    while (levels.back().n > 1 && (1 << levels.size()) < 4 * hole_fill_texels) {
+        const PullLevel& below = levels.back();
+        PullLevel up;
+        pull(below.n, up, [&](PullLevel& level, std::size_t o, std::size_t b) {
+            if (below.weight[b] <= 0.0f) {
+                return;
+            }
+            level.weight[o] += below.weight[b];
+            level.sum_rgb[o] += below.sum_rgb[b];
+            level.sum_normal[o] += below.sum_normal[b];
+            level.sum_distance[o] += below.sum_distance[b];
+            level.max_distance[o] = std::max(level.max_distance[o], below.max_distance[b]);
+            if (below.min_distance[b] < level.min_distance[o]) {
+                level.min_distance[o] = below.min_distance[b];
+                level.min_rgb[o] = below.min_rgb[b];
+                level.min_normal[o] = below.min_normal[b];
+            }
+        });
         levels.push_back(std::move(up));
-        // A hole of K texels is bridged once blocks are 2K wide; no need to go further.
-        if ((1 << (levels.size() - 1)) >= 4 * hole_fill_texels) {
-            break;
-        }
     }
     // Push: each texel of a small hole takes the smallest enclosing block with support.
-    for (std::size_t i = 0; i < map.texel_count(); ++i) {
+    tbb::parallel_for(std::size_t{0}, map.texel_count(), [&](std::size_t i) {
         if (!fill[i]) {
-            continue;
+            return;
         }
         const std::size_t x = i % static_cast<std::size_t>(n);
         const std::size_t y = i / static_cast<std::size_t>(n);
-        for (std::size_t l = 1; l < levels.size(); ++l) {
-            const PullLevel& level = levels[l];
+        for (std::size_t l = 1; l <= levels.size(); ++l) {
+            const PullLevel& level = levels[l - 1];
             const std::size_t o = (y >> l) * static_cast<std::size_t>(level.n) + (x >> l);
             if (level.weight[o] <= 0.0f) {
                 continue;
@@ -365,7 +372,7 @@ void pull_push(ProbeMap& map, const std::vector<std::uint8_t>& fill, int hole_fi
             }
             break;
         }
-    }
+    });
 }
 
 } // namespace
