@@ -43,6 +43,10 @@ CloudBakeSource prepare_cloud_bake(std::shared_ptr<const PointCloud> cloud,
             source.hierarchy = std::move(cached->hierarchy);
             source.normals_seconds = seconds_since(start);
             source.from_cache = true;
+            const auto copy_start = std::chrono::steady_clock::now();
+            source.curve =
+                curve_ordered_cloud(*source.cloud, source.geometry, source.hierarchy, progress);
+            source.hierarchy_seconds = seconds_since(copy_start);
             return source;
         }
     }
@@ -50,6 +54,7 @@ CloudBakeSource prepare_cloud_bake(std::shared_ptr<const PointCloud> cloud,
     source.normals_seconds = seconds_since(start);
     const auto hierarchy_start = std::chrono::steady_clock::now();
     source.hierarchy = hierarchy_for_bakes(*source.cloud, source.geometry, settings, progress);
+    source.curve = curve_ordered_cloud(*source.cloud, source.geometry, source.hierarchy, progress);
     source.hierarchy_seconds = seconds_since(hierarchy_start);
     if (!entry.empty()) {
         try {
@@ -61,6 +66,15 @@ CloudBakeSource prepare_cloud_bake(std::shared_ptr<const PointCloud> cloud,
         }
     }
     return source;
+}
+
+ProbeMap bake_probe(const CloudBakeSource& source, const glm::dvec3& centre, Progress* progress) {
+    if (!source.curve.empty()) {
+        return bake_probe_from_curve_ordered(source.curve, source.hierarchy, centre,
+                                             source.settings, progress);
+    }
+    return bake_probe_from_hierarchy(*source.cloud, source.geometry, source.hierarchy, centre,
+                                     source.settings, progress);
 }
 
 ProbeSetManifest cloud_bake_manifest(const PointCloud& cloud, const ProbePlacement& placement,
@@ -112,8 +126,7 @@ std::vector<StagedProbe> bake_staged_probes(const CloudBakeSource& source,
                                             const std::vector<std::size_t>& indices,
                                             const std::string& staging, Progress* progress) {
     return stage_probes(placement, indices, staging, progress, [&](const glm::dvec3& centre) {
-        return bake_probe_from_hierarchy(*source.cloud, source.geometry, source.hierarchy, centre,
-                                         source.settings, progress);
+        return bake_probe(source, centre, progress);
     });
 }
 
@@ -166,10 +179,7 @@ BakeSummary bake_probe_set_from_cloud(const PointCloud& cloud, const ProbePlacem
         prepare_cloud_bake(borrowed, settings, geometry_options, progress, cache_dir);
     BakeSummary summary = write_probe_set(
         folder, cloud_bake_manifest(cloud, placement, settings, geometry_options, sources),
-        [&](std::size_t i) {
-            return bake_probe_from_hierarchy(cloud, source.geometry, source.hierarchy,
-                                             placement.positions[i], settings, progress);
-        },
+        [&](std::size_t i) { return bake_probe(source, placement.positions[i], progress); },
         progress);
     summary.normals_seconds = source.normals_seconds;
     summary.hierarchy_seconds = source.hierarchy_seconds;

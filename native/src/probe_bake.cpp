@@ -13,6 +13,7 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "lfprobe/error.hpp"
@@ -28,6 +29,10 @@ constexpr std::uint64_t kNoPoint = std::numeric_limits<std::uint64_t>::max();
 // the point's id; bit 63 marks the far side of a cell surfel.
 constexpr std::uint64_t kFarSide = std::uint64_t{1} << 63;
 constexpr std::size_t kPointChunk = 65536;
+// Points copied out of the source's arrays at a time (BakePoint): 24 KiB, within L1 or L2.
+constexpr std::size_t kGatherBlock = 512;
+// How many points ahead a copy asks for the attributes it reads next.
+constexpr std::size_t kPrefetchAhead = 16;
 // A point whose neighbours' mean lies this far off it, in 1/64 spacings (0.6 spacings), is at
 // its surface's edge: inside a surface the 12 neighbours' mean lies within about 0.35 spacings
 // of the point (random sampling; near 0 on a scanner's regular pattern), at a straight edge
@@ -210,18 +215,23 @@ struct ColourSum {
     std::uint64_t weight = 0;
     std::array<std::uint64_t, 3> rgb{};
 
-    void add(const glm::vec3& colour, float w) {
+    // A point's colour in fixed point, made once per point rather than once per texel.
+    using Quantised = std::array<std::uint64_t, 3>;
+    static Quantised quantised(const glm::vec3& colour) {
+        return {quantised(colour.x), quantised(colour.y), quantised(colour.z)};
+    }
+    void add(const Quantised& colour, float w) {
         const auto qw = static_cast<std::uint64_t>(std::lround(w * kWeightScale));
         if (qw == 0) {
             return;
         }
         std::atomic_ref<std::uint64_t>(weight).fetch_add(qw, std::memory_order_relaxed);
-        for (int c = 0; c < 3; ++c) {
-            // Colours are non-negative (the readers clamp); larger than 2^16 they saturate.
-            std::atomic_ref<std::uint64_t>(rgb[static_cast<std::size_t>(c)])
-                .fetch_add(quantised(colour[c]) * qw, std::memory_order_relaxed);
+        for (std::size_t c = 0; c < 3; ++c) {
+            std::atomic_ref<std::uint64_t>(rgb[c]).fetch_add(colour[c] * qw,
+                                                             std::memory_order_relaxed);
         }
     }
+    // Colours are non-negative (the readers clamp); larger than 2^16 they saturate.
     static std::uint64_t quantised(float colour) {
         return static_cast<std::uint64_t>(
             std::lround(std::clamp(colour, 0.0f, 65535.0f) * kColourScale));
@@ -281,6 +291,8 @@ struct CloudPoints {
     }
     [[nodiscard]] glm::vec3 colour(std::size_t i) const { return colours(i); }
     [[nodiscard]] static bool is_cell_surfel(std::size_t /*i*/) { return false; }
+    [[nodiscard]] static bool gather_whole() { return false; }
+    static void prefetch(std::size_t /*j*/) {}
 };
 
 // A probe's cut of the point hierarchy: its full-density points first, then its cell surfels.
@@ -289,6 +301,7 @@ struct CutPoints {
     const LocalGeometry& geometry;
     const PointColours& colours;
     const HierarchyCut& cut;
+    bool scattered;
 
     [[nodiscard]] std::size_t count() const { return cut.size(); }
     [[nodiscard]] std::size_t id(std::size_t j) const { return j; }
@@ -322,7 +335,57 @@ struct CutPoints {
         return s != nullptr ? s->colour : colours(cut.points[i]);
     }
     [[nodiscard]] bool is_cell_surfel(std::size_t i) const { return i >= cut.points.size(); }
+    // Whether the cut's points lie scattered over the arrays (a cloud in its own order) rather
+    // than in the cut's order (gathered, or a copy in curve order): then the bake copies them
+    // out once (id(j) is j).
+    [[nodiscard]] bool gather_whole() const { return scattered; }
+    // Asks for point j's attributes ahead of their copy (BakePoint).
+    void prefetch(std::size_t j) const {
+        if (j < cut.points.size()) {
+            const std::uint32_t i = cut.points[j];
+            __builtin_prefetch(&cloud.positions[i]);
+            __builtin_prefetch(&geometry.normals[i]);
+            __builtin_prefetch(&geometry.spacing[i]);
+            __builtin_prefetch(&geometry.oriented[i]);
+            if (geometry.edges.size() == cloud.size()) {
+                __builtin_prefetch(&geometry.edges[i]);
+            }
+            if (cloud.has_colors()) {
+                __builtin_prefetch(&cloud.colors[i]);
+            }
+        }
+    }
 };
+
+// What the splat passes read of one visited point, copied out of the source's arrays a block
+// at a time: a cut's points lie scattered over the cloud's arrays (a cache miss per attribute
+// and pass), and a block copied in one tight loop keeps many of those misses in flight where
+// the splat's arithmetic between them kept one or two.
+struct BakePoint {
+    glm::vec3 position;
+    float spacing;
+    glm::vec3 normal;
+    std::uint32_t edge; // the SurfaceEdge's bytes: no initialiser, so an array of these is
+                        // left unset until written
+    glm::vec3 colour;
+    std::uint32_t id;
+    bool oriented;
+    bool cell_surfel;
+};
+
+template <class Source>
+BakePoint bake_point(const Source& source, std::size_t i) {
+    BakePoint b{};
+    b.position = source.position(i);
+    b.spacing = source.spacing(i);
+    b.normal = source.normal(i);
+    b.edge = std::bit_cast<std::uint32_t>(source.edge(i));
+    b.colour = source.colour(i);
+    b.id = static_cast<std::uint32_t>(i);
+    b.oriented = source.oriented(i);
+    b.cell_surfel = source.is_cell_surfel(i);
+    return b;
+}
 
 void check_bake_arguments(const BakeSettings& settings, std::size_t points,
                           const LocalGeometry& geometry, const glm::dvec3& centre) {
@@ -363,91 +426,157 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     const int max_radius = std::max(1, std::min(settings.max_splat_radius_texels, n / 2));
     const std::size_t count = source.count();
 
-    // Point i as this probe sees it; false for a point at the probe centre (no direction).
-    auto surfel_of = [&](std::size_t i, Surfel& p) {
-        p.v = glm::vec3(glm::dvec3(source.position(i)) - centre);
+    // A point as this probe sees it; false for a point at the probe centre (no direction).
+    auto surfel_of = [&](const BakePoint& b, Surfel& p) {
+        p.v = glm::vec3(glm::dvec3(b.position) - centre);
         p.dist = glm::length(p.v);
         if (!(p.dist >= settings.min_distance)) {
             return false;
         }
         p.dir = p.v / p.dist;
-        const glm::vec3 normal = source.normal(i);
-        p.normal = !source.oriented(i) && glm::dot(normal, p.v) > 0.0f ? -normal : normal;
+        p.normal = !b.oriented && glm::dot(b.normal, p.v) > 0.0f ? -b.normal : b.normal;
         p.normal_v = glm::dot(p.normal, p.v);
-        p.reach = settings.splat_plane_reach * settings.splat_scale * source.spacing(i);
-        const SurfaceEdge edge = source.edge(i);
+        p.reach = settings.splat_plane_reach * settings.splat_scale * b.spacing;
+        const auto edge = std::bit_cast<SurfaceEdge>(b.edge);
         if (settings.splat_edge_margin >= 0.0f && edge.offset >= kEdgeOffset) {
             p.inward = glm::normalize(glm::vec3(edge.inward[0], edge.inward[1], edge.inward[2]));
-            p.edge_reach = settings.splat_edge_margin * source.spacing(i);
+            p.edge_reach = settings.splat_edge_margin * b.spacing;
         }
         return true;
     };
     // Calls visit(texel, surfel, plane hit) for every texel point i's splat covers: the texels
     // in the cone of the splat radius seen face-on whose ray meets the point's surface plane
     // within splat_plane_reach splat radii of the point (BakeSettings says why).
-    auto for_each_splat_texel = [&](std::size_t i, auto&& visit) {
+    auto for_each_splat_texel = [&](const BakePoint& b, auto&& visit) {
         Surfel p;
-        if (!surfel_of(i, p)) {
+        if (!surfel_of(b, p)) {
             return;
         }
         const oct::Texel home = oct::texel_of_direction(p.dir, n);
-        p.splat_angle = std::atan2(settings.splat_scale * source.spacing(i), p.dist);
+        p.splat_angle = std::atan2(settings.splat_scale * b.spacing, p.dist);
         const float alpha = p.splat_angle;
         const float cos_alpha = std::cos(alpha);
-        const float cos_core =
-            settings.splat_core_scale >= settings.splat_scale
-                ? -2.0f // every covered texel is core
-                : std::cos(std::atan2(settings.splat_core_scale * source.spacing(i), p.dist));
+        // Made when a neighbour first needs it: most points claim only their own texel.
+        float cos_core = std::numeric_limits<float>::quiet_NaN();
+        auto core_cosine = [&] {
+            if (std::isnan(cos_core)) {
+                cos_core =
+                    settings.splat_core_scale >= settings.splat_scale
+                        ? -2.0f // every covered texel is core
+                        : std::cos(std::atan2(settings.splat_core_scale * b.spacing, p.dist));
+            }
+            return cos_core;
+        };
         // A point with no surface (too few neighbours for a normal) keeps the whole cone.
         const bool has_plane = glm::dot(p.normal, p.normal) > 0.0f;
         // A neighbour k texels away lies at least (k - 0.5) texel angles from `dir`.
         const int r = texel_angles.search_radius(home, alpha, max_radius);
+        // The point always claims its own texel; neighbours only inside its cone where their
+        // ray meets the point's surface plane near the point.
+        auto claim = [&](std::size_t t, bool own) {
+            const glm::vec3& texel_dir = directions[t];
+            PlaneHit hit = plane_hit(p, texel_dir);
+            if (!own && has_plane && !hit.in_disc) {
+                return;
+            }
+            hit.beyond_edge = hit.beyond_edge && !own;
+            hit.fringe = !own && glm::dot(texel_dir, p.dir) < core_cosine();
+            visit(t, p, hit);
+        };
+        const int side = 2 * r + 1;
+        if (home.x >= r && home.y >= r && home.x + r < n && home.y + r < n && side <= 32) {
+            // Away from the map's edges the square needs no folding and its rows are runs of
+            // the direction table: a row's cone test is made for all its texels, without a
+            // branch, into a mask of the texels to claim (most of the square lies outside the
+            // cone, and a branch per texel mispredicted often).
+            for (int dy = -r; dy <= r; ++dy) {
+                const std::size_t first = oct::texel_index({home.x - r, home.y + dy}, n);
+                std::uint32_t mask = 0;
+                for (int k = 0; k < side; ++k) {
+                    mask |= static_cast<std::uint32_t>(
+                                !(glm::dot(directions[first + static_cast<std::size_t>(k)], p.dir) <
+                                  cos_alpha))
+                            << k;
+                }
+                if (dy == 0) {
+                    mask |= std::uint32_t{1} << r;
+                }
+                while (mask != 0) {
+                    const int k = std::countr_zero(mask);
+                    mask &= mask - 1;
+                    claim(first + static_cast<std::size_t>(k), dy == 0 && k == r);
+                }
+            }
+            return;
+        }
         for (int dy = -r; dy <= r; ++dy) {
             for (int dx = -r; dx <= r; ++dx) {
                 const std::size_t t =
                     oct::texel_index(oct::wrap_texel(home.x + dx, home.y + dy, n), n);
-                const glm::vec3& texel_dir = directions[t];
                 const bool own = dx == 0 && dy == 0;
-                if (!own && glm::dot(texel_dir, p.dir) < cos_alpha) {
+                if (!own && glm::dot(directions[t], p.dir) < cos_alpha) {
                     continue;
                 }
-                // The point always claims its own texel; neighbours only inside its cone where
-                // their ray meets the point's surface plane near the point.
-                PlaneHit hit = plane_hit(p, texel_dir);
-                if (!own && has_plane && !hit.in_disc) {
-                    continue;
-                }
-                hit.beyond_edge = hit.beyond_edge && !own;
-                hit.fringe = !own && glm::dot(texel_dir, p.dir) < cos_core;
-                visit(t, p, hit);
+                claim(t, own);
             }
         }
     };
+    // A scattered cut (Source::gather_whole) is copied out once for both passes and the resolve, in
+    // parallel: its points bound the copy (about the probe's texels), where a whole cloud's
+    // copy would grow with the cloud, so that one is copied a block at a time per pass.
+    std::unique_ptr<BakePoint[]> gathered;
+    if (source.gather_whole()) {
+        // Left unset until the copy writes it: zeroing first would touch every page on one
+        // thread.
+        gathered = std::make_unique_for_overwrite<BakePoint[]>(count);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kGatherBlock),
+                          [&](const tbb::blocked_range<std::size_t>& range) {
+                              for (std::size_t j = range.begin(); j < range.end(); ++j) {
+                                  if (j + kPrefetchAhead < count) {
+                                      source.prefetch(j + kPrefetchAhead);
+                                  }
+                                  gathered[j] = bake_point(source, source.id(j));
+                              }
+                          });
+    }
     auto over_points = [&](const char* stage, auto&& per_point) {
         if (progress != nullptr) {
             progress->begin_stage(stage, count);
         }
-        tbb::parallel_for(std::size_t{0}, (count + kPointChunk - 1) / kPointChunk,
-                          [&](std::size_t chunk) {
-                              if (progress != nullptr) {
-                                  progress->throw_if_cancelled();
-                              }
-                              const std::size_t end = std::min(count, (chunk + 1) * kPointChunk);
-                              for (std::size_t j = chunk * kPointChunk; j < end; ++j) {
-                                  per_point(source.id(j));
-                              }
-                              if (progress != nullptr) {
-                                  progress->advance(end - chunk * kPointChunk);
-                              }
-                          });
+        tbb::parallel_for(
+            std::size_t{0}, (count + kPointChunk - 1) / kPointChunk, [&](std::size_t chunk) {
+                if (progress != nullptr) {
+                    progress->throw_if_cancelled();
+                }
+                const std::size_t end = std::min(count, (chunk + 1) * kPointChunk);
+                if (gathered) {
+                    for (std::size_t j = chunk * kPointChunk; j < end; ++j) {
+                        per_point(gathered[j]);
+                    }
+                } else {
+                    std::array<BakePoint, kGatherBlock> block;
+                    for (std::size_t b = chunk * kPointChunk; b < end; b += kGatherBlock) {
+                        const std::size_t m = std::min(kGatherBlock, end - b);
+                        for (std::size_t q = 0; q < m; ++q) {
+                            block[q] = bake_point(source, source.id(b + q));
+                        }
+                        for (std::size_t q = 0; q < m; ++q) {
+                            per_point(block[q]);
+                        }
+                    }
+                }
+                if (progress != nullptr) {
+                    progress->advance(end - chunk * kPointChunk);
+                }
+            });
     };
 
     // Pass 1: the nearest surface depth per texel among the splats of its first kind: cores,
     // then fringes, then splats past their surface's edge (front_key).
     // All bits set: no splat yet (above every depth, of any kind).
     std::vector<std::uint64_t> front(texels, ~std::uint64_t{0});
-    over_points("splatting points: depth", [&](std::size_t i) {
-        for_each_splat_texel(i, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
+    over_points("splatting points: depth", [&](const BakePoint& b) {
+        for_each_splat_texel(b, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
             keep_smaller(front[t], front_key(hit, surfel_depth(p, hit)));
         });
     });
@@ -461,10 +590,10 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
         0.5f * static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(n);
     std::vector<std::uint64_t> winner(texels, kNoPoint);
     std::vector<ColourSum> colour_sums(texels);
-    over_points("splatting points: colour", [&](std::size_t i) {
-        const float thickness = source.spacing(i);
-        const glm::vec3 rgb = source.colour(i);
-        for_each_splat_texel(i, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
+    over_points("splatting points: colour", [&](const BakePoint& b) {
+        const float thickness = b.spacing;
+        const ColourSum::Quantised rgb = ColourSum::quantised(b.colour);
+        for_each_splat_texel(b, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
             const float depth = surfel_depth(p, hit);
             if (hit.beyond_edge != ((front[t] & kBeyondEdge) != 0) ||
                 hit.fringe != ((front[t] & kFringe) != 0)) {
@@ -478,13 +607,11 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
             // within it of the near side: one whose known normal faces away from the probe is
             // that far side. It gives no colour, and wins a texel only where no surfel facing
             // the probe reaches it (the top bit orders it last).
-            const bool far_side =
-                source.is_cell_surfel(i) && source.oriented(i) && p.normal_v > 0.0f;
+            const bool far_side = b.cell_surfel && b.oriented && p.normal_v > 0.0f;
             const float off_centre = std::max(0.0f, 1.0f - glm::dot(directions[t], p.dir));
             keep_smaller(winner[t],
                          (far_side ? kFarSide : std::uint64_t{0}) |
-                             (static_cast<std::uint64_t>(ordered_bits(off_centre)) << 32) |
-                             static_cast<std::uint32_t>(i));
+                             (static_cast<std::uint64_t>(ordered_bits(off_centre)) << 32) | b.id);
             if (!far_side) {
                 colour_sums[t].add(
                     rgb, texel_colour_weight(off_centre, half_texel_angle, p.splat_angle));
@@ -497,10 +624,11 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
         if (winner[t] == kNoPoint) {
             return;
         }
-        const std::size_t i = static_cast<std::uint32_t>(winner[t] & 0xffffffffu);
-        const glm::vec3 rgb = colour_sums[t].mean(source.colour(i));
+        const auto id = static_cast<std::uint32_t>(winner[t] & 0xffffffffu);
+        const BakePoint b = gathered ? gathered[id] : bake_point(source, id);
+        const glm::vec3 rgb = colour_sums[t].mean(b.colour);
         Surfel p{};
-        (void)surfel_of(i, p); // a winner was splatted, so it has a direction
+        (void)surfel_of(b, p); // a winner was splatted, so it has a direction
         // BakeSettings::face_the_probe: a winner facing away is turned toward the centre.
         const glm::vec3 normal = settings.face_the_probe && glm::dot(p.normal, directions[t]) > 0.0f
                                      ? -p.normal
@@ -553,7 +681,7 @@ ProbeMap bake_probe_from_hierarchy(const PointCloud& cloud, const LocalGeometry&
     const HierarchyCut cut =
         cut_for_probe(hierarchy, centre, texel_angle, settings.lod_texels, progress);
     const PointColours colours(cloud, hierarchy.intensity);
-    return bake_from(CutPoints{cloud, geometry, colours, cut}, centre, settings, progress);
+    return bake_from(CutPoints{cloud, geometry, colours, cut, true}, centre, settings, progress);
 }
 
 ProbeMap bake_probe_from_gathered_cut(const PointCloud& points, const LocalGeometry& geometry,
@@ -569,7 +697,7 @@ ProbeMap bake_probe_from_gathered_cut(const PointCloud& points, const LocalGeome
         }
     }
     const PointColours colours(points);
-    return bake_from(CutPoints{points, geometry, colours, cut}, centre, settings, progress);
+    return bake_from(CutPoints{points, geometry, colours, cut, false}, centre, settings, progress);
 }
 
 } // namespace lfprobe

@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "lfprobe/curve_ordered_cloud.hpp"
 #include "lfprobe/local_geometry.hpp"
 #include "lfprobe/point_cloud.hpp"
 #include "lfprobe/point_hierarchy.hpp"
@@ -32,8 +33,11 @@ struct CloudBakeSource {
     LocalGeometryOptions geometry_options;
     LocalGeometry geometry;
     PointHierarchy hierarchy;
+    // The points in the hierarchy's curve order, which every probe's bake reads (empty when
+    // the bake takes every point: lod_texels 0, or a cloud too sparse for a hierarchy).
+    CurveOrderedCloud curve;
     double normals_seconds = 0.0;
-    double hierarchy_seconds = 0.0;
+    double hierarchy_seconds = 0.0; // the hierarchy and the curve-ordered copy
     // True when the geometry and the hierarchy were read from the prepared-cloud cache
     // (prepared_cloud_cache.hpp); normals_seconds is then the read.
     bool from_cache = false;
@@ -52,6 +56,10 @@ struct CloudBakeSource {
                                                  const LocalGeometryOptions& geometry_options,
                                                  Progress* progress = nullptr,
                                                  const std::string& cache_dir = {});
+
+// One probe at `centre` (local frame) from `source`, the same probe whichever process bakes it.
+[[nodiscard]] ProbeMap bake_probe(const CloudBakeSource& source, const glm::dvec3& centre,
+                                  Progress* progress = nullptr);
 
 // The manifest of a cloud bake before its probes are listed: world offset, placement, the bake
 // settings and the sources as given.
