@@ -373,6 +373,19 @@ struct BakePoint {
     bool cell_surfel;
 };
 
+// A splat's shape as a probe sees it, found by the first pass and read by the second: its
+// direction's texel, its search radius, its angular radius and that angle's cosine (an
+// arctangent and a cosine a point, and the octahedral encoding). 16 bytes a point.
+struct SplatShape {
+    std::uint16_t x, y; // resolutions are at most 16384
+    std::uint16_t radius;
+    float splat_angle;
+    float cos_alpha;
+};
+// Up to this many points keep their shapes (512 MiB): a cut stays below it (about twice the
+// probe's texels); a bake of every point of a larger cloud finds them again instead.
+constexpr std::size_t kMaxKeptShapes = std::size_t{32} << 20;
+
 template <class Source>
 BakePoint bake_point(const Source& source, std::size_t i) {
     BakePoint b{};
@@ -447,15 +460,37 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     // Calls visit(texel, surfel, plane hit) for every texel point i's splat covers: the texels
     // in the cone of the splat radius seen face-on whose ray meets the point's surface plane
     // within splat_plane_reach splat radii of the point (BakeSettings says why).
-    auto for_each_splat_texel = [&](const BakePoint& b, auto&& visit) {
+    // The splat's shape as the first pass found it, kept for the second when the points are
+    // few enough (SplatShape): the direction's texel, the cone and the search radius.
+    std::unique_ptr<SplatShape[]> shapes;
+    if (count <= kMaxKeptShapes) {
+        shapes = std::make_unique_for_overwrite<SplatShape[]>(count);
+    }
+    auto for_each_splat_texel = [&](const BakePoint& b, std::size_t j, bool again, auto&& visit) {
         Surfel p;
         if (!surfel_of(b, p)) {
             return;
         }
-        const oct::Texel home = oct::texel_of_direction(p.dir, n);
-        p.splat_angle = std::atan2(settings.splat_scale * b.spacing, p.dist);
-        const float alpha = p.splat_angle;
-        const float cos_alpha = std::cos(alpha);
+        oct::Texel home;
+        float cos_alpha = 0.0f;
+        int r = 0;
+        if (again && shapes) {
+            const SplatShape& shape = shapes[j];
+            home = {shape.x, shape.y};
+            p.splat_angle = shape.splat_angle;
+            cos_alpha = shape.cos_alpha;
+            r = shape.radius;
+        } else {
+            home = oct::texel_of_direction(p.dir, n);
+            p.splat_angle = std::atan2(settings.splat_scale * b.spacing, p.dist);
+            cos_alpha = std::cos(p.splat_angle);
+            // A neighbour k texels away lies at least (k - 0.5) texel angles from `dir`.
+            r = texel_angles.search_radius(home, p.splat_angle, max_radius);
+            if (shapes) {
+                shapes[j] = {static_cast<std::uint16_t>(home.x), static_cast<std::uint16_t>(home.y),
+                             static_cast<std::uint16_t>(r), p.splat_angle, cos_alpha};
+            }
+        }
         // Made when a neighbour first needs it: most points claim only their own texel.
         float cos_core = std::numeric_limits<float>::quiet_NaN();
         auto core_cosine = [&] {
@@ -469,8 +504,6 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
         };
         // A point with no surface (too few neighbours for a normal) keeps the whole cone.
         const bool has_plane = glm::dot(p.normal, p.normal) > 0.0f;
-        // A neighbour k texels away lies at least (k - 0.5) texel angles from `dir`.
-        const int r = texel_angles.search_radius(home, alpha, max_radius);
         // The point always claims its own texel; neighbours only inside its cone where their
         // ray meets the point's surface plane near the point.
         auto claim = [&](std::size_t t, bool own) {
@@ -551,7 +584,7 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
                 const std::size_t end = std::min(count, (chunk + 1) * kPointChunk);
                 if (gathered) {
                     for (std::size_t j = chunk * kPointChunk; j < end; ++j) {
-                        per_point(gathered[j]);
+                        per_point(gathered[j], j);
                     }
                 } else {
                     std::array<BakePoint, kGatherBlock> block;
@@ -561,7 +594,7 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
                             block[q] = bake_point(source, source.id(b + q));
                         }
                         for (std::size_t q = 0; q < m; ++q) {
-                            per_point(block[q]);
+                            per_point(block[q], b + q);
                         }
                     }
                 }
@@ -575,8 +608,8 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     // then fringes, then splats past their surface's edge (front_key).
     // All bits set: no splat yet (above every depth, of any kind).
     std::vector<std::uint64_t> front(texels, ~std::uint64_t{0});
-    over_points("splatting points: depth", [&](const BakePoint& b) {
-        for_each_splat_texel(b, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
+    over_points("splatting points: depth", [&](const BakePoint& b, std::size_t j) {
+        for_each_splat_texel(b, j, false, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
             keep_smaller(front[t], front_key(hit, surfel_depth(p, hit)));
         });
     });
@@ -590,10 +623,10 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
         0.5f * static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(n);
     std::vector<std::uint64_t> winner(texels, kNoPoint);
     std::vector<ColourSum> colour_sums(texels);
-    over_points("splatting points: colour", [&](const BakePoint& b) {
+    over_points("splatting points: colour", [&](const BakePoint& b, std::size_t j) {
         const float thickness = b.spacing;
         const ColourSum::Quantised rgb = ColourSum::quantised(b.colour);
-        for_each_splat_texel(b, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
+        for_each_splat_texel(b, j, true, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
             const float depth = surfel_depth(p, hit);
             if (hit.beyond_edge != ((front[t] & kBeyondEdge) != 0) ||
                 hit.fringe != ((front[t] & kFringe) != 0)) {
