@@ -386,9 +386,21 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
     // Neighbours are searched in the cells of the points' Morton order: queries and their
     // candidates sit close together in memory, and a block of cells is a few runs of it.
     const morton::SortedPoints sorted = morton::sort_points(cloud.positions);
+    // What the search reads and writes per point, in the sorted order: the cloud's arrays are
+    // in file order, and reading or writing them at each point's place amid the search's
+    // arithmetic missed the cache at every point; copied in and out in tight loops, many of
+    // those misses are in flight at once.
     std::vector<glm::vec3> positions(n);
-    tbb::parallel_for(std::size_t{0}, n,
-                      [&](std::size_t j) { positions[j] = cloud.positions[sorted.order[j]]; });
+    std::vector<std::uint32_t> scan_of(n);
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t j) {
+        positions[j] = cloud.positions[sorted.order[j]];
+        scan_of[j] = cloud.scan_index[sorted.order[j]];
+    });
+    LocalGeometry in_order;
+    in_order.normals.resize(n);
+    in_order.spacing.resize(n);
+    in_order.oriented.assign(n, 0);
+    in_order.edges.resize(n);
     std::vector<Leaf> leaves;
     split_into_leaves(sorted.keys, 0, static_cast<std::uint32_t>(n), morton::kBitsPerAxis, leaves);
     if (progress != nullptr) {
@@ -429,7 +441,6 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
                     guess = found > 0 && nearest.d2(found - 1) > 0.0f
                                 ? 2.0f * nearest.d2(found - 1)
                                 : std::numeric_limits<float>::infinity();
-                    const std::size_t i = sorted.order[j];
                     const glm::vec3 p = positions[j];
                     // Spacing: mean distance to the nearest distinct neighbours (duplicates
                     // skipped).
@@ -442,8 +453,9 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
                             ++spacing_count;
                         }
                     }
-                    result.spacing[i] =
+                    const float spacing =
                         spacing_count > 0 ? static_cast<float>(spacing_sum / spacing_count) : 0.0f;
+                    in_order.spacing[j] = spacing;
 
                     glm::vec3 normal(0.0f);
                     const std::size_t m = std::min(found, normal_count);
@@ -453,32 +465,37 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
                     }
                     mean /= static_cast<double>(std::max<std::size_t>(m, 1));
                     if (use_file_normals) {
-                        normal = cloud.normals[i];
-                        result.oriented[i] = 1;
+                        normal = cloud.normals[sorted.order[j]];
+                        in_order.oriented[j] = 1;
                     } else {
+                        // The upper triangle; the lower mirrors it (each product is the same
+                        // either way round).
                         double cov[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
                         for (std::size_t q = 0; q < m; ++q) {
                             const glm::dvec3 e = glm::dvec3(positions[nearest.index(q)]) - mean;
                             for (int r = 0; r < 3; ++r) {
-                                for (int c = 0; c < 3; ++c) {
+                                for (int c = r; c < 3; ++c) {
                                     cov[r][c] += e[r] * e[c];
                                 }
                             }
                         }
+                        cov[1][0] = cov[0][1];
+                        cov[2][0] = cov[0][2];
+                        cov[2][1] = cov[1][2];
                         if (m >= 3) {
                             normal = smallest_eigenvector(cov);
                         }
                     }
-                    const ScanSource& scan = cloud.scans[cloud.scan_index[i]];
+                    const ScanSource& scan = cloud.scans[scan_of[j]];
                     if (scan.has_scanner && glm::dot(normal, normal) > 0.0f) {
                         const glm::vec3 to_scanner = glm::vec3(scan.scanner - glm::dvec3(p));
                         if (glm::dot(normal, to_scanner) < 0.0f) {
                             normal = -normal;
                         }
-                        result.oriented[i] = 1;
+                        in_order.oriented[j] = 1;
                     }
-                    result.normals[i] = normal;
-                    result.edges[i] = surface_edge(mean - glm::dvec3(p), normal, result.spacing[i]);
+                    in_order.normals[j] = normal;
+                    in_order.edges[j] = surface_edge(mean - glm::dvec3(p), normal, spacing);
                 }
                 done += leaf.end - leaf.begin;
             }
@@ -486,6 +503,13 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
                 progress->advance(done);
             }
         });
+    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t j) {
+        const std::uint32_t i = sorted.order[j];
+        result.normals[i] = in_order.normals[j];
+        result.spacing[i] = in_order.spacing[j];
+        result.oriented[i] = in_order.oriented[j];
+        result.edges[i] = in_order.edges[j];
+    });
     result.spatial_order = sorted.order;
     return result;
 }
