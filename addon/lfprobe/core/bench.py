@@ -336,7 +336,8 @@ def main(args) -> int:
         mib = 1024 * 1024
         print(
             f"  local geometry (kNN normals + spacing, once per cloud): {b['normals_seconds_per_cloud']:.2f} s\n"
-            f"  point hierarchy (once per cloud): {b['hierarchy_seconds_per_cloud']:.2f} s\n"
+            f"  point hierarchy and the points in its curve order (once per cloud): "
+            f"{b['hierarchy_seconds_per_cloud']:.2f} s\n"
             f"  bake per probe (splat, resolve, hole fill): {b['bake_seconds_per_probe']:.2f} s\n"
             f"  EXR write per probe: {b['write_seconds_per_probe']:.2f} s\n"
             f"  coverage: surface {100 * b['coverage']['surface']:.2f}%, "

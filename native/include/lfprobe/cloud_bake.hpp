@@ -34,7 +34,8 @@ struct CloudBakeSource {
     LocalGeometry geometry;
     PointHierarchy hierarchy;
     // The points in the hierarchy's curve order, which every probe's bake reads (empty when
-    // the bake takes every point: lod_texels 0, or a cloud too sparse for a hierarchy).
+    // the bake takes every point: lod_texels 0, or a cloud too sparse for a hierarchy; and for
+    // clouds over 32 M points, whose cuts are copied out of the cloud's arrays per probe).
     CurveOrderedCloud curve;
     double normals_seconds = 0.0;
     double hierarchy_seconds = 0.0; // the hierarchy and the curve-ordered copy
