@@ -212,8 +212,9 @@ float texel_colour_weight(float off_centre, float half_texel_angle, float splat_
 struct ColourSum {
     static constexpr float kWeightScale = 4096.0f;  // 12 fractional bits of weight
     static constexpr float kColourScale = 65536.0f; // 16 fractional bits of colour
-    std::uint64_t weight = 0;
-    std::array<std::uint64_t, 3> rgb{};
+    // No initialisers, so that a map's worth is made unset and zeroed in parallel (filled).
+    std::uint64_t weight;
+    std::array<std::uint64_t, 3> rgb;
 
     // A point's colour in fixed point, made once per point rather than once per texel.
     using Quantised = std::array<std::uint64_t, 3>;
@@ -250,6 +251,18 @@ struct ColourSum {
                 static_cast<float>(static_cast<double>(rgb[2]) * scale)};
     }
 };
+
+// `count` copies of `value`, written on all cores: a 2048² map's texel buffers are 200 MB,
+// which a vector's constructor writes on one thread.
+template <class T>
+std::unique_ptr<T[]> filled(std::size_t count, const T& value) {
+    auto out = std::make_unique_for_overwrite<T[]>(count);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, std::size_t{1} << 16),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          std::fill(out.get() + range.begin(), out.get() + range.end(), value);
+                      });
+    return out;
+}
 
 // Non-negative floats order like their bit patterns.
 std::uint32_t ordered_bits(float non_negative) {
@@ -430,7 +443,7 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     ProbeMap map(n, centre);
     const std::size_t texels = map.texel_count();
     const TexelAngleBounds& texel_angles = TexelAngleBounds::of(n);
-    std::vector<glm::vec3> directions(texels);
+    const auto directions = std::make_unique_for_overwrite<glm::vec3[]>(texels);
     tbb::parallel_for(0, n, [&](int y) {
         for (int x = 0; x < n; ++x) {
             directions[oct::texel_index({x, y}, n)] = oct::texel_direction({x, y}, n);
@@ -607,7 +620,7 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     // Pass 1: the nearest surface depth per texel among the splats of its first kind: cores,
     // then fringes, then splats past their surface's edge (front_key).
     // All bits set: no splat yet (above every depth, of any kind).
-    std::vector<std::uint64_t> front(texels, ~std::uint64_t{0});
+    const auto front = filled(texels, ~std::uint64_t{0});
     over_points("splatting points: depth", [&](const BakePoint& b, std::size_t j) {
         for_each_splat_texel(b, j, false, [&](std::size_t t, const Surfel& p, const PlaneHit& hit) {
             keep_smaller(front[t], front_key(hit, surfel_depth(p, hit)));
@@ -621,8 +634,8 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     // the same for any thread count and any order of the points.
     const float half_texel_angle =
         0.5f * static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(n);
-    std::vector<std::uint64_t> winner(texels, kNoPoint);
-    std::vector<ColourSum> colour_sums(texels);
+    const auto winner = filled(texels, kNoPoint);
+    const auto colour_sums = filled(texels, ColourSum{0, {0, 0, 0}});
     over_points("splatting points: colour", [&](const BakePoint& b, std::size_t j) {
         const float thickness = b.spacing;
         const ColourSum::Quantised rgb = ColourSum::quantised(b.colour);
