@@ -7,7 +7,6 @@
 #include <tbb/parallel_for.h>
 
 #include "lfprobe/error.hpp"
-#include "lfprobe/octahedral.hpp"
 #include "lfprobe/point_colours.hpp"
 
 namespace lfprobe {
@@ -65,26 +64,12 @@ ProbeMap bake_probe_from_curve_ordered(const CurveOrderedCloud& curve,
     if (curve.points.size() != hierarchy.order.size() || hierarchy.levels.empty()) {
         throw InputError("bake: the curve-ordered points do not belong to this hierarchy");
     }
-    if (!(settings.lod_texels > 0.0f) || !std::isfinite(settings.lod_texels)) {
-        throw InputError("bake: curve-ordered points bake from the point hierarchy's cuts; "
-                         "lod_texels must be above 0");
-    }
-    if (settings.resolution < 2 || settings.resolution > 16384) {
-        throw InputError("bake: resolution must be between 2 and 16384, got " +
-                         std::to_string(settings.resolution));
-    }
-    if (!(std::isfinite(centre.x) && std::isfinite(centre.y) && std::isfinite(centre.z))) {
-        throw InputError("bake: probe position must be finite");
-    }
     // The cut over the hierarchy with its points taken in curve order: the cut's indices are
-    // then positions in the copy. The texel angle as bake_probe_from_hierarchy takes it, so
-    // that the cut is the same.
+    // then positions in the copy.
     PointHierarchyView view = PointHierarchyView::of(hierarchy);
     view.order = {};
-    const float texel_angle =
-        static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(settings.resolution);
     const HierarchyCut cut =
-        cut_for_probe(view, centre, texel_angle, settings.lod_texels, progress);
+        cut_for_bake(view, centre, settings, "a curve-ordered cloud", progress);
     return bake_probe_from_gathered_cut(curve.points, curve.geometry, cut, centre, settings,
                                         progress);
 }

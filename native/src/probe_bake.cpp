@@ -413,6 +413,11 @@ BakePoint bake_point(const Source& source, std::size_t i) {
     return b;
 }
 
+// A texel's angle at the settings' resolution, as the cuts take it.
+float texel_angle_of(const BakeSettings& settings) {
+    return static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(settings.resolution);
+}
+
 void check_bake_arguments(const BakeSettings& settings, std::size_t points,
                           const LocalGeometry& geometry, const glm::dvec3& centre) {
     const int n = settings.resolution;
@@ -722,12 +727,28 @@ ProbeMap bake_probe_from_hierarchy(const PointCloud& cloud, const LocalGeometry&
     if (hierarchy.order.size() != cloud.size()) {
         throw InputError("bake: the point hierarchy does not belong to this cloud");
     }
-    const float texel_angle =
-        static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(settings.resolution);
     const HierarchyCut cut =
-        cut_for_probe(hierarchy, centre, texel_angle, settings.lod_texels, progress);
+        cut_for_probe(hierarchy, centre, texel_angle_of(settings), settings.lod_texels, progress);
     const PointColours colours(cloud, hierarchy.intensity);
     return bake_from(CutPoints{cloud, geometry, colours, cut, true}, centre, settings, progress);
+}
+
+HierarchyCut cut_for_bake(const PointHierarchyView& hierarchy, const glm::dvec3& centre,
+                          const BakeSettings& settings, const std::string& source,
+                          Progress* progress) {
+    if (!(settings.lod_texels > 0.0f) || !std::isfinite(settings.lod_texels)) {
+        throw InputError("bake: " + source +
+                         " bakes from the point hierarchy's cuts; lod_texels must be above 0");
+    }
+    if (settings.resolution < 2 || settings.resolution > 16384) {
+        throw InputError("bake: resolution must be between 2 and 16384, got " +
+                         std::to_string(settings.resolution));
+    }
+    if (!(std::isfinite(centre.x) && std::isfinite(centre.y) && std::isfinite(centre.z))) {
+        throw InputError("bake: probe position must be finite");
+    }
+    return cut_for_probe(hierarchy, centre, texel_angle_of(settings), settings.lod_texels,
+                         progress);
 }
 
 ProbeMap bake_probe_from_gathered_cut(const PointCloud& points, const LocalGeometry& geometry,

@@ -456,22 +456,8 @@ void SpatialCloud::gather(HierarchyCut& cut, PointCloud& points, LocalGeometry& 
 
 ProbeMap bake_probe_from_spatial_cloud(const SpatialCloud& cloud, const glm::dvec3& centre,
                                        const BakeSettings& settings, Progress* progress) {
-    if (!(settings.lod_texels > 0.0f) || !std::isfinite(settings.lod_texels)) {
-        throw InputError("bake: a spatial cloud bakes from the point hierarchy's cuts; "
-                         "lod_texels must be above 0");
-    }
-    if (settings.resolution < 2 || settings.resolution > 16384) {
-        throw InputError("bake: resolution must be between 2 and 16384, got " +
-                         std::to_string(settings.resolution));
-    }
-    if (!(std::isfinite(centre.x) && std::isfinite(centre.y) && std::isfinite(centre.z))) {
-        throw InputError("bake: probe position must be finite");
-    }
-    // As bake_probe_from_hierarchy takes it, so that the cut is the same.
-    const float texel_angle =
-        static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(settings.resolution);
     HierarchyCut cut =
-        cut_for_probe(cloud.hierarchy(), centre, texel_angle, settings.lod_texels, progress);
+        cut_for_bake(cloud.hierarchy(), centre, settings, "a spatial cloud", progress);
     PointCloud points;
     LocalGeometry geometry;
     cloud.gather(cut, points, geometry);

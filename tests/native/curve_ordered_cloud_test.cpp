@@ -11,24 +11,15 @@
 #include "lfprobe/cloud_bake.hpp"
 #include "lfprobe/curve_ordered_cloud.hpp"
 #include "lfprobe/error.hpp"
+#include "same_probe.hpp"
 #include "wall_cloud.hpp"
 
 using namespace lfprobe;
+using lfprobe::testing::at;
+using lfprobe::testing::expect_same_probe;
 using lfprobe::testing::same_bits;
 
 namespace {
-
-BakeSettings at(int resolution) {
-    BakeSettings settings;
-    settings.resolution = resolution;
-    return settings;
-}
-
-void expect_same_probe(const ProbeMap& a, const ProbeMap& b) {
-    EXPECT_TRUE(same_bits(a.distance, b.distance));
-    EXPECT_TRUE(same_bits(a.rgba, b.rgba));
-    EXPECT_TRUE(same_bits(a.normal, b.normal));
-}
 
 // The cloud's points in a shuffled order: the curve order then differs from the file's
 // everywhere, as it does for a scanner's lines.

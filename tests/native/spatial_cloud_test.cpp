@@ -16,10 +16,13 @@
 #include "lfprobe/cloud_bake.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/spatial_cloud.hpp"
+#include "same_probe.hpp"
 #include "temp_folder.hpp"
 #include "wall_cloud.hpp"
 
 using namespace lfprobe;
+using lfprobe::testing::at;
+using lfprobe::testing::expect_same_probe;
 using lfprobe::testing::same_bits;
 
 namespace {
@@ -28,18 +31,6 @@ namespace fs = std::filesystem;
 
 CloudBakeSource prepare(const PointCloud& cloud) {
     return prepare_cloud_bake(std::make_shared<const PointCloud>(cloud), BakeSettings{}, {});
-}
-
-BakeSettings at(int resolution) {
-    BakeSettings settings;
-    settings.resolution = resolution;
-    return settings;
-}
-
-void expect_same_probe(const ProbeMap& a, const ProbeMap& b) {
-    EXPECT_TRUE(same_bits(a.distance, b.distance));
-    EXPECT_TRUE(same_bits(a.rgba, b.rgba));
-    EXPECT_TRUE(same_bits(a.normal, b.normal));
 }
 
 // A corridor's floor, `length` metres along x and 2 m wide, scanned every `pitch` from

@@ -94,6 +94,14 @@ bake_probe_from_gathered_cut(const PointCloud& points, const LocalGeometry& geom
                              const HierarchyCut& cut, const glm::dvec3& centre,
                              const BakeSettings& settings, Progress* progress = nullptr);
 
+// The cut of `hierarchy` that a bake with `settings` at `centre` takes, the one
+// bake_probe_from_hierarchy takes, for bakes from a copy of the points (a spatial cloud, points in
+// curve order). InputError, naming `source`, unless lod_texels asks for cuts and the resolution
+// and the centre are ones a bake takes.
+[[nodiscard]] HierarchyCut cut_for_bake(const PointHierarchyView& hierarchy,
+                                        const glm::dvec3& centre, const BakeSettings& settings,
+                                        const std::string& source, Progress* progress = nullptr);
+
 // The hierarchy bakes with `settings` take from `cloud`: built (build_point_hierarchy) when
 // settings.lod_texels asks for cuts, else empty, which bake_probe_from_hierarchy reads as
 // "every point". Built once, it serves every probe of a set.
