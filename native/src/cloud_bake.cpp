@@ -168,8 +168,12 @@ std::optional<SpatialCloudEntry> write_spatial_cloud_of(const CloudBakeSource& s
     } catch (const IoError&) {
         // Missing or not usable: written (again) below.
     }
-    write_spatial_cloud(entry.path, key, *source.cloud, source.geometry, source.hierarchy,
-                        progress);
+    if (!source.curve.empty()) {
+        write_spatial_cloud(entry.path, key, source.curve, source.hierarchy, progress);
+    } else {
+        write_spatial_cloud(entry.path, key, *source.cloud, source.geometry, source.hierarchy,
+                            progress);
+    }
     entry.written = true;
     return entry;
 }

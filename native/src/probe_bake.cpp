@@ -31,8 +31,6 @@ constexpr std::uint64_t kFarSide = std::uint64_t{1} << 63;
 constexpr std::size_t kPointChunk = 65536;
 // Points copied out of the source's arrays at a time (BakePoint): 24 KiB, within L1 or L2.
 constexpr std::size_t kGatherBlock = 512;
-// How many points ahead a copy asks for the attributes it reads next.
-constexpr std::size_t kPrefetchAhead = 16;
 // A point whose neighbours' mean lies this far off it, in 1/64 spacings (0.6 spacings), is at
 // its surface's edge: inside a surface the 12 neighbours' mean lies within about 0.35 spacings
 // of the point (random sampling; near 0 on a scanner's regular pattern), at a straight edge
@@ -305,7 +303,6 @@ struct CloudPoints {
     [[nodiscard]] glm::vec3 colour(std::size_t i) const { return colours(i); }
     [[nodiscard]] static bool is_cell_surfel(std::size_t /*i*/) { return false; }
     [[nodiscard]] static bool gather_whole() { return false; }
-    static void prefetch(std::size_t /*j*/) {}
 };
 
 // A probe's cut of the point hierarchy: its full-density points first, then its cell surfels.
@@ -352,22 +349,6 @@ struct CutPoints {
     // than in the cut's order (gathered, or a copy in curve order): then the bake copies them
     // out once (id(j) is j).
     [[nodiscard]] bool gather_whole() const { return scattered; }
-    // Asks for point j's attributes ahead of their copy (BakePoint).
-    void prefetch(std::size_t j) const {
-        if (j < cut.points.size()) {
-            const std::uint32_t i = cut.points[j];
-            __builtin_prefetch(&cloud.positions[i]);
-            __builtin_prefetch(&geometry.normals[i]);
-            __builtin_prefetch(&geometry.spacing[i]);
-            __builtin_prefetch(&geometry.oriented[i]);
-            if (geometry.edges.size() == cloud.size()) {
-                __builtin_prefetch(&geometry.edges[i]);
-            }
-            if (cloud.has_colors()) {
-                __builtin_prefetch(&cloud.colors[i]);
-            }
-        }
-    }
 };
 
 // What the splat passes read of one visited point, copied out of the source's arrays a block
@@ -583,9 +564,6 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kGatherBlock),
                           [&](const tbb::blocked_range<std::size_t>& range) {
                               for (std::size_t j = range.begin(); j < range.end(); ++j) {
-                                  if (j + kPrefetchAhead < count) {
-                                      source.prefetch(j + kPrefetchAhead);
-                                  }
                                   gathered[j] = bake_point(source, source.id(j));
                               }
                           });

@@ -129,12 +129,14 @@ public:
             std::memcpy(out, values.data() + first, n * sizeof(T));
         });
     }
-    // values[order[k]] for k = 0 … order.size() - 1: the points in Morton order.
+    // values[order[k]] for k = 0 … count - 1: the points in Morton order (`order` null: the
+    // values are in that order already).
     template <class T, class Value>
-    FileSection in_order(const std::vector<std::uint32_t>& order, Value&& value) {
-        return section(order.size(), sizeof(T), [&](std::size_t first, std::size_t n, char* out) {
+    FileSection in_order(const std::uint32_t* order, std::size_t count, Value&& value) {
+        return section(count, sizeof(T), [&](std::size_t first, std::size_t n, char* out) {
             for (std::size_t k = 0; k < n; ++k) {
-                const T v = value(order[first + k]);
+                const T v = value(order != nullptr ? order[first + k]
+                                                   : static_cast<std::uint32_t>(first + k));
                 std::memcpy(out + k * sizeof(T), &v, sizeof(T));
             }
         });
@@ -226,9 +228,14 @@ std::string spatial_cloud_entry_path(const PreparedCloudKey& key, const std::str
         .string();
 }
 
-void write_spatial_cloud(const std::string& path, const PreparedCloudKey& key,
-                         const PointCloud& cloud, const LocalGeometry& geometry,
-                         const PointHierarchy& hierarchy, Progress* progress) {
+namespace {
+
+// write_spatial_cloud of `cloud` and `geometry` in their own order (`in_curve_order` false: the
+// hierarchy's order permutes them) or already in curve order (a CurveOrderedCloud).
+void write_spatial_cloud_of_points(const std::string& path, const PreparedCloudKey& key,
+                                   const PointCloud& cloud, const LocalGeometry& geometry,
+                                   const PointHierarchy& hierarchy, bool in_curve_order,
+                                   Progress* progress) {
     const std::size_t n = cloud.size();
     if (hierarchy.levels.empty() || hierarchy.levels.size() > kMaxLevels ||
         hierarchy.order.size() != n || geometry.normals.size() != n ||
@@ -265,21 +272,21 @@ void write_spatial_cloud(const std::string& path, const PreparedCloudKey& key,
         header.origin = {hierarchy.origin.x, hierarchy.origin.y, hierarchy.origin.z};
         header.cube_size = hierarchy.cube_size;
         header.level_count = static_cast<std::uint32_t>(hierarchy.levels.size());
-        const std::vector<std::uint32_t>& order = hierarchy.order;
+        const std::uint32_t* order = in_curve_order ? nullptr : hierarchy.order.data();
         const PointColours colour_of(cloud, hierarchy.intensity);
         header.points[kPositions] =
-            w.in_order<glm::vec3>(order, [&](std::uint32_t i) { return cloud.positions[i]; });
+            w.in_order<glm::vec3>(order, n, [&](std::uint32_t i) { return cloud.positions[i]; });
         header.points[kColours] =
-            w.in_order<glm::vec3>(order, [&](std::uint32_t i) { return colour_of(i); });
+            w.in_order<glm::vec3>(order, n, [&](std::uint32_t i) { return colour_of(i); });
         header.points[kNormals] =
-            w.in_order<glm::vec3>(order, [&](std::uint32_t i) { return geometry.normals[i]; });
+            w.in_order<glm::vec3>(order, n, [&](std::uint32_t i) { return geometry.normals[i]; });
         header.points[kSpacing] =
-            w.in_order<float>(order, [&](std::uint32_t i) { return geometry.spacing[i]; });
-        header.points[kOriented] =
-            w.in_order<std::uint8_t>(order, [&](std::uint32_t i) { return geometry.oriented[i]; });
+            w.in_order<float>(order, n, [&](std::uint32_t i) { return geometry.spacing[i]; });
+        header.points[kOriented] = w.in_order<std::uint8_t>(
+            order, n, [&](std::uint32_t i) { return geometry.oriented[i]; });
         header.points[kEdges] = geometry.edges.empty()
                                     ? FileSection{0, 0}
-                                    : w.in_order<SurfaceEdge>(order, [&](std::uint32_t i) {
+                                    : w.in_order<SurfaceEdge>(order, n, [&](std::uint32_t i) {
                                           return geometry.edges[i];
                                       });
         std::vector<FileLevel> levels;
@@ -306,6 +313,21 @@ void write_spatial_cloud(const std::string& path, const PreparedCloudKey& key,
     }
     cache_file::close_written(fd, name);
     temporary.commit_as(target);
+}
+
+} // namespace
+
+void write_spatial_cloud(const std::string& path, const PreparedCloudKey& key,
+                         const PointCloud& cloud, const LocalGeometry& geometry,
+                         const PointHierarchy& hierarchy, Progress* progress) {
+    write_spatial_cloud_of_points(path, key, cloud, geometry, hierarchy, false, progress);
+}
+
+void write_spatial_cloud(const std::string& path, const PreparedCloudKey& key,
+                         const CurveOrderedCloud& curve, const PointHierarchy& hierarchy,
+                         Progress* progress) {
+    write_spatial_cloud_of_points(path, key, curve.points, curve.geometry, hierarchy, true,
+                                  progress);
 }
 
 SpatialCloud::SpatialCloud(const std::string& path, const std::string& key_hex)

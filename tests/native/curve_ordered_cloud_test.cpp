@@ -1,6 +1,8 @@
 // The bake from a cloud's points copied into curve order (curve_ordered_cloud.hpp) against the
 // bake through the cloud's own arrays: the same cut, so the same probe, bit for bit.
 #include <algorithm>
+#include <fstream>
+#include <iterator>
 #include <memory>
 #include <numeric>
 #include <random>
@@ -11,7 +13,9 @@
 #include "lfprobe/cloud_bake.hpp"
 #include "lfprobe/curve_ordered_cloud.hpp"
 #include "lfprobe/error.hpp"
+#include "lfprobe/spatial_cloud.hpp"
 #include "same_probe.hpp"
+#include "temp_folder.hpp"
 #include "wall_cloud.hpp"
 
 using namespace lfprobe;
@@ -100,4 +104,24 @@ TEST(CurveOrderedCloud, ACopyOfAnotherCloudIsRefused) {
     EXPECT_THROW((void)bake_probe_from_curve_ordered(small.curve, small.hierarchy,
                                                      glm::dvec3(-0.7, 0.2, 0.1), every_point),
                  InputError);
+}
+
+TEST(CurveOrderedCloud, ASpatialCloudWrittenFromTheCopyIsTheSameFile) {
+    const CloudBakeSource source = prepare_cloud_bake(
+        std::make_shared<const PointCloud>(shuffled(lfprobe::testing::wall_corner(0.02f))), at(64),
+        {});
+    ASSERT_FALSE(source.curve.empty());
+    const auto folder = lfprobe::testing::fresh_dir("curve_", "spatial");
+    const PreparedCloudKey key = prepared_cloud_key(*source.cloud, source.geometry_options, true);
+    const std::string gathered = (folder / "gathered.lfpspatial").string();
+    const std::string copied = (folder / "copied.lfpspatial").string();
+    write_spatial_cloud(gathered, key, *source.cloud, source.geometry, source.hierarchy);
+    write_spatial_cloud(copied, key, source.curve, source.hierarchy);
+    auto bytes = [](const std::string& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::vector<char>(std::istreambuf_iterator<char>(in), {});
+    };
+    const std::vector<char> a = bytes(gathered);
+    EXPECT_GT(a.size(), 0u);
+    EXPECT_EQ(a, bytes(copied));
 }

@@ -19,6 +19,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "lfprobe/curve_ordered_cloud.hpp"
 #include "lfprobe/local_geometry.hpp"
 #include "lfprobe/mapped_file.hpp"
 #include "lfprobe/point_cloud.hpp"
@@ -39,6 +40,11 @@ namespace lfprobe {
 void write_spatial_cloud(const std::string& path, const PreparedCloudKey& key,
                          const PointCloud& cloud, const LocalGeometry& geometry,
                          const PointHierarchy& hierarchy, Progress* progress = nullptr);
+// The same file from the cloud's points already copied into curve order (from `hierarchy`):
+// read front to back instead of gathered again.
+void write_spatial_cloud(const std::string& path, const PreparedCloudKey& key,
+                         const CurveOrderedCloud& curve, const PointHierarchy& hierarchy,
+                         Progress* progress = nullptr);
 
 class SpatialCloud {
 public:
