@@ -285,11 +285,12 @@ void bind_mesh(py::module_& m) {
 
     m.def(
         "start_ground_truth",
-        [](MeshArg mesh, const std::string& camera, const std::string& output, int spp,
-           int threads) {
+        [](MeshArg mesh, const std::string& camera, const std::string& output, int spp, int threads,
+           bool filter_textures) {
             const Camera cam = camera_from(camera);
             GroundTruthSettings settings;
             settings.samples_per_pixel = spp;
+            settings.filter_textures = filter_textures;
             return std::make_unique<Job>(
                 std::function<GroundTruthStats(Progress&)>([=](Progress& progress) {
                     progress.begin_stage("loading mesh", 1);
@@ -311,9 +312,11 @@ void bind_mesh(py::module_& m) {
                     }));
         },
         py::arg("mesh"), py::arg("camera"), py::arg("output"), py::arg("spp") = 1,
-        py::arg("threads") = 0,
+        py::arg("threads") = 0, py::arg("filter_textures") = GroundTruthSettings{}.filter_textures,
         "Start an Embree ground truth render of `mesh` (path or Mesh) from `camera` (JSON path or "
-        "text) into the EXR `output`; spp is 1 or a square. The Job's result is the stats dict.");
+        "text) into the EXR `output`; spp is 1 or a square. filter_textures: each sample's "
+        "texture colour is the mean over its footprint (texture LOD), else point-sampled. The "
+        "Job's result is the stats dict.");
 
     m.def(
         "embree_throughput",
@@ -339,7 +342,7 @@ void bind_mesh(py::module_& m) {
         [](MeshArg mesh, const std::string& folder, int resolution,
            std::vector<std::vector<double>> positions, std::optional<std::vector<double>> grid_min,
            std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
-           const std::string& sources_json, int supersample) {
+           const std::string& sources_json, int supersample, bool filter_textures) {
             // Checked now so that bad placements raise at once; made local to the mesh's world
             // offset once the job has the mesh.
             (void)placement_from(positions, grid_min, grid_max, counts, glm::dvec3(0.0));
@@ -347,6 +350,7 @@ void bind_mesh(py::module_& m) {
             MeshBakeSettings settings;
             settings.resolution = resolution;
             settings.supersample = supersample;
+            settings.filter_textures = filter_textures;
             return std::make_unique<Job>(
                 std::function<BakeSummary(Progress&)>([=](Progress& progress) {
                     progress.begin_stage("loading mesh", 1);
@@ -363,9 +367,11 @@ void bind_mesh(py::module_& m) {
         py::arg("positions") = std::vector<std::vector<double>>{}, py::arg("grid_min") = py::none(),
         py::arg("grid_max") = py::none(), py::arg("counts") = py::none(),
         py::arg("sources_json") = "[]", py::arg("supersample") = MeshBakeSettings{}.supersample,
+        py::arg("filter_textures") = MeshBakeSettings{}.filter_textures,
         "Start baking a probe set from a mesh (path or Mesh) with Embree; the Job's result is the "
         "summary dict. supersample: n×n rays per texel for its colour, counting only those on the "
-        "centre ray's surface.");
+        "centre ray's surface. filter_textures: each ray's texture colour is the mean over its "
+        "footprint (texture LOD), else point-sampled.");
 
     m.def(
         "start_simulate_scan",

@@ -1,6 +1,8 @@
 #include "lfprobe/embree_scene.hpp"
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <limits>
 #include <stdexcept>
 #include <string>
@@ -228,6 +230,10 @@ glm::vec3 EmbreeScene::facing(const glm::vec3& n, const glm::dvec3& direction) {
 }
 
 MeshHit EmbreeScene::intersect(const Ray& ray) const {
+    return intersect(ray, 0.0);
+}
+
+MeshHit EmbreeScene::intersect(const Ray& ray, double spread) const {
     MeshHit out;
     RTCRayHit rh;
     if (!cast(impl_->scene, ray, rh)) {
@@ -270,7 +276,13 @@ MeshHit EmbreeScene::intersect(const Ray& ray) const {
         out.uv = w * m.corner_uvs[3 * tri] + out.u * m.corner_uvs[3 * tri + 1] +
                  out.v * m.corner_uvs[3 * tri + 2];
     }
-    out.base_color = m.base_color(tri, out.u, out.v);
+    double footprint = 0.0;
+    if (spread > 0.0) {
+        constexpr double kMinCos = 1.0 / 16.0;
+        const double cos_incidence = std::max(std::abs(denom), kMinCos);
+        footprint = out.t * spread / std::sqrt(cos_incidence);
+    }
+    out.base_color = m.base_color(tri, out.u, out.v, footprint);
     return out;
 }
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include <glm/geometric.hpp>
 #include <nlohmann/json.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -24,6 +25,25 @@ nlohmann::json GroundTruthStats::to_json() const {
                           {"seconds", seconds},
                           {"rays_per_second", rays_per_second()}};
 }
+
+namespace {
+
+// The width per metre along the ray of one of a pixel's n×n samples: the angle between the
+// pixel's centre ray and the rays a stratum to the side and a stratum down (their geometric
+// mean), which holds for panoramas as for pinhole cameras.
+double sample_spread(const CameraRays& rays, int x, int y, int n) {
+    const double step = 1.0 / n;
+    const glm::dvec3 centre = rays.local_pixel_ray(x, y, glm::dvec3(0.0)).direction;
+    const glm::dvec3 across =
+        rays.local_pixel_ray(x, y, glm::dvec3(0.0), 0.5 + step, 0.5).direction;
+    const glm::dvec3 down = rays.local_pixel_ray(x, y, glm::dvec3(0.0), 0.5, 0.5 + step).direction;
+    const double a = glm::length(across - centre);
+    const double b = glm::length(down - centre);
+    const double spread = std::sqrt(a * b);
+    return std::isfinite(spread) ? spread : 0.0;
+}
+
+} // namespace
 
 RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera,
                                   const GroundTruthSettings& settings, Progress* progress,
@@ -49,7 +69,9 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
                 for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
                     const std::size_t i = image.index(x, y);
                     const Ray centre_ray = camera_rays.local_pixel_ray(x, y, offset);
-                    const MeshHit centre = scene.intersect(centre_ray);
+                    const double spread =
+                        settings.filter_textures ? sample_spread(camera_rays, x, y, n) : 0.0;
+                    const MeshHit centre = scene.intersect(centre_ray, n == 1 ? spread : 0.0);
                     ++tile_rays;
                     glm::vec3 colour{0.0f};
                     float coverage = 0.0f;
@@ -65,7 +87,7 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
                                 const double ox = stratum_centre(sx, n);
                                 const double oy = stratum_centre(sy, n);
                                 const MeshHit h = scene.intersect(
-                                    camera_rays.local_pixel_ray(x, y, offset, ox, oy));
+                                    camera_rays.local_pixel_ray(x, y, offset, ox, oy), spread);
                                 ++tile_rays;
                                 if (h.hit) {
                                     colour += h.base_color;
@@ -125,8 +147,10 @@ GroundTruthStats ground_truth_to_exr(const EmbreeScene& scene, const std::string
     metadata.source = nlohmann::json{{"ground_truth", mesh_path},
                                      {"samples_per_pixel", settings.samples_per_pixel}};
     metadata.camera = camera.to_json();
-    metadata.settings = nlohmann::json{{"samples_per_pixel", settings.samples_per_pixel},
-                                       {"tile_size", settings.tile_size}};
+    metadata.settings =
+        nlohmann::json{{"samples_per_pixel", settings.samples_per_pixel},
+                       {"tile_size", settings.tile_size},
+                       {"texture_filter", settings.filter_textures ? "footprint" : "point"}};
     metadata.stats = stats.to_json();
     write_rendered_exr(output_path, image, metadata);
     return stats;

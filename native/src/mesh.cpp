@@ -11,6 +11,29 @@
 
 namespace lfprobe {
 
+namespace {
+
+// How many of the texture's texels a metre of triangle `tri` spans: the square root of its
+// texel area over its surface area (an isotropic measure, as one mip level is).
+double texels_per_metre(const Mesh& mesh, std::size_t tri, const Texture& texture) {
+    const glm::dvec3 p0(mesh.vertices[mesh.triangles[tri][0]]);
+    const glm::dvec3 p1(mesh.vertices[mesh.triangles[tri][1]]);
+    const glm::dvec3 p2(mesh.vertices[mesh.triangles[tri][2]]);
+    const double area = glm::length(glm::cross(p1 - p0, p2 - p0));
+    const glm::dvec2 t0(mesh.corner_uvs[3 * tri]);
+    const glm::dvec2 t1(mesh.corner_uvs[3 * tri + 1]);
+    const glm::dvec2 t2(mesh.corner_uvs[3 * tri + 2]);
+    const glm::dvec2 a = t1 - t0;
+    const glm::dvec2 b = t2 - t0;
+    const double uv_area = std::abs(a.x * b.y - a.y * b.x) * texture.width * texture.height;
+    if (!(area > 0.0) || !(uv_area > 0.0) || !std::isfinite(uv_area / area)) {
+        return 0.0;
+    }
+    return std::sqrt(uv_area / area);
+}
+
+} // namespace
+
 MeshBounds Mesh::bounds() const {
     if (triangles.empty()) {
         return {};
@@ -27,13 +50,19 @@ MeshBounds Mesh::bounds() const {
 }
 
 glm::vec3 Mesh::base_color(std::size_t tri, float u, float v) const {
+    return base_color(tri, u, v, 0.0);
+}
+
+glm::vec3 Mesh::base_color(std::size_t tri, float u, float v, double footprint) const {
     const float w = 1.0f - u - v;
     const Material& m = materials[material[tri]];
     glm::vec3 c = m.base_color;
     if (m.texture && has_uvs()) {
         const glm::vec2 uv =
             w * corner_uvs[3 * tri] + u * corner_uvs[3 * tri + 1] + v * corner_uvs[3 * tri + 2];
-        c *= m.texture->sample(uv);
+        c *= footprint > 0.0
+                 ? m.texture->sample(uv, footprint * texels_per_metre(*this, tri, *m.texture))
+                 : m.texture->sample(uv);
     }
     if (has_colors()) {
         c *= w * corner_colors[3 * tri] + u * corner_colors[3 * tri + 1] +

@@ -37,7 +37,7 @@ void check_settings(const MeshBakeSettings& s) {
 // centre's colour, so that a surface of one colour stays exactly that colour.
 glm::vec3 texel_footprint_colour(const EmbreeScene& scene, const glm::dvec3& position,
                                  oct::Texel texel, int n, int ss, const MeshHit& centre,
-                                 const glm::dvec3& normal) {
+                                 const glm::dvec3& normal, double spread) {
     const double distance_scale = centre.t * oct::kTexelAngleTimesN / n; // the texel's footprint
     const double same_surface = 1e-4 + 2.0 * distance_scale;
     const glm::dvec3 centre_point =
@@ -55,7 +55,7 @@ glm::vec3 texel_footprint_colour(const EmbreeScene& scene, const glm::dvec3& pos
             Ray sub;
             sub.origin = position;
             sub.direction = glm::dvec3(oct::decode(uv));
-            const MeshHit h = scene.intersect(sub);
+            const MeshHit h = scene.intersect(sub, spread);
             if (!h.hit) {
                 continue;
             }
@@ -79,6 +79,9 @@ ProbeMap bake_probe_from_mesh(const EmbreeScene& scene, const glm::dvec3& positi
     check_settings(settings);
     const int n = settings.resolution;
     const int ss = settings.supersample;
+    // A ray's footprint: the texel's width over the rays per side (each ray stands for one
+    // stratum of its texel).
+    const double spread = settings.filter_textures ? oct::kTexelAngleTimesN / n / ss : 0.0;
     ProbeMap map(n, position);
     if (progress != nullptr) {
         progress->begin_stage("baking probe from mesh", static_cast<std::uint64_t>(n));
@@ -94,7 +97,7 @@ ProbeMap bake_probe_from_mesh(const EmbreeScene& scene, const glm::dvec3& positi
                 Ray ray;
                 ray.origin = position;
                 ray.direction = glm::dvec3(oct::texel_direction(texel, n));
-                const MeshHit centre = scene.intersect(ray);
+                const MeshHit centre = scene.intersect(ray, spread);
                 if (!centre.hit) {
                     map.set_empty(i);
                     continue;
@@ -103,7 +106,7 @@ ProbeMap bake_probe_from_mesh(const EmbreeScene& scene, const glm::dvec3& positi
                 glm::vec3 colour = centre.base_color;
                 if (ss > 1) {
                     colour = texel_footprint_colour(scene, position, texel, n, ss, centre,
-                                                    glm::dvec3(normal));
+                                                    glm::dvec3(normal), spread);
                 }
                 map.set_surface(i, static_cast<float>(centre.t), colour, normal, 1.0f);
             }
@@ -128,13 +131,15 @@ BakeSummary bake_probe_set_from_mesh(const EmbreeScene& scene, const ProbePlacem
     ProbeSetManifest manifest;
     manifest.world_offset = scene.mesh().world_offset;
     manifest.placement = placement;
-    manifest.bake = nlohmann::json{{"source", "mesh"},
-                                   {"mesh", scene.mesh().path},
-                                   {"triangles", scene.mesh().triangle_count()},
-                                   {"resolution", settings.resolution},
-                                   {"supersample", settings.supersample},
-                                   {"normals", "shading normal if present, else geometric; "
-                                               "turned to face the probe"}};
+    manifest.bake =
+        nlohmann::json{{"source", "mesh"},
+                       {"mesh", scene.mesh().path},
+                       {"triangles", scene.mesh().triangle_count()},
+                       {"resolution", settings.resolution},
+                       {"supersample", settings.supersample},
+                       {"texture_filter", settings.filter_textures ? "footprint" : "point"},
+                       {"normals", "shading normal if present, else geometric; "
+                                   "turned to face the probe"}};
     manifest.sources = sources;
     return write_probe_set(
         folder, std::move(manifest),

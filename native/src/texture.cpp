@@ -1,5 +1,6 @@
 #include "lfprobe/texture.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -95,6 +96,7 @@ Texture Texture::load(const std::string& path) {
     for (std::size_t i = 0; i < n; ++i) {
         t.rgb[i] = table[pixels.get()[i]];
     }
+    t.build_mips();
     return t;
 }
 
@@ -131,6 +133,7 @@ Texture Texture::from_pixels(std::string name, int width, int height, const floa
             }
         }
     }
+    t.build_mips();
     return t;
 }
 
@@ -141,10 +144,15 @@ glm::vec3 Texture::texel(int x, int y) const {
     return {rgb[i], rgb[i + 1], rgb[i + 2]};
 }
 
-glm::vec3 Texture::sample(const glm::vec2& uv) const {
-    if (width < 1 || height < 1) {
-        return glm::vec3(1.0f);
-    }
+namespace {
+
+int wrap_index(double i, int n) {
+    const double m = std::fmod(i, static_cast<double>(n));
+    return static_cast<int>(m < 0.0 ? m + n : m);
+}
+
+// Bilinear with repeat wrap over one level's texels (3 floats each, row 0 the top row).
+glm::vec3 bilinear(const float* rgb, int width, int height, const glm::vec2& uv) {
     // Continuous texel coordinates with texel centres on integers; v is flipped because OBJ
     // texture coordinates have v up while image rows go down.
     const double fx = static_cast<double>(uv.x) * width - 0.5;
@@ -156,17 +164,93 @@ glm::vec3 Texture::sample(const glm::vec2& uv) const {
     const double y0f = std::floor(fy);
     const auto ax = static_cast<float>(fx - x0f);
     const auto ay = static_cast<float>(fy - y0f);
-    auto wrap = [](double i, int n) {
-        const double m = std::fmod(i, static_cast<double>(n));
-        return static_cast<int>(m < 0.0 ? m + n : m);
+    const int x0 = wrap_index(x0f, width);
+    const int x1 = wrap_index(x0f + 1.0, width);
+    const int y0 = wrap_index(y0f, height);
+    const int y1 = wrap_index(y0f + 1.0, height);
+    auto at = [&](int x, int y) {
+        const std::size_t i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                               static_cast<std::size_t>(x)) *
+                              3;
+        return glm::vec3(rgb[i], rgb[i + 1], rgb[i + 2]);
     };
-    const int x0 = wrap(x0f, width);
-    const int x1 = wrap(x0f + 1.0, width);
-    const int y0 = wrap(y0f, height);
-    const int y1 = wrap(y0f + 1.0, height);
-    const glm::vec3 top = texel(x0, y0) * (1.0f - ax) + texel(x1, y0) * ax;
-    const glm::vec3 bottom = texel(x0, y1) * (1.0f - ax) + texel(x1, y1) * ax;
+    const glm::vec3 top = at(x0, y0) * (1.0f - ax) + at(x1, y0) * ax;
+    const glm::vec3 bottom = at(x0, y1) * (1.0f - ax) + at(x1, y1) * ax;
     return top * (1.0f - ay) + bottom * ay;
+}
+
+Texture::Level halved(const float* rgb, int width, int height) {
+    Texture::Level out;
+    out.width = (width + 1) / 2;
+    out.height = (height + 1) / 2;
+    out.rgb.resize(static_cast<std::size_t>(out.width) * static_cast<std::size_t>(out.height) * 3);
+    for (int y = 0; y < out.height; ++y) {
+        const int ys[2] = {(2 * y) % height, (2 * y + 1) % height};
+        for (int x = 0; x < out.width; ++x) {
+            const int xs[2] = {(2 * x) % width, (2 * x + 1) % width};
+            for (int c = 0; c < 3; ++c) {
+                float sum = 0.0f;
+                for (const int sy : ys) {
+                    for (const int sx : xs) {
+                        sum += rgb[(static_cast<std::size_t>(sy) * static_cast<std::size_t>(width) +
+                                    static_cast<std::size_t>(sx)) *
+                                       3 +
+                                   static_cast<std::size_t>(c)];
+                    }
+                }
+                out.rgb[(static_cast<std::size_t>(y) * static_cast<std::size_t>(out.width) +
+                         static_cast<std::size_t>(x)) *
+                            3 +
+                        static_cast<std::size_t>(c)] = 0.25f * sum;
+            }
+        }
+    }
+    return out;
+}
+
+} // namespace
+
+glm::vec3 Texture::sample(const glm::vec2& uv) const {
+    if (width < 1 || height < 1) {
+        return glm::vec3(1.0f);
+    }
+    return bilinear(rgb.data(), width, height, uv);
+}
+
+glm::vec3 Texture::sample(const glm::vec2& uv, double footprint_texels) const {
+    // Level L averages 2^L texels a side, so a footprint of f texels reads level log2(f).
+    if (!(footprint_texels > 1.0) || mips.empty()) {
+        return sample(uv);
+    }
+    const double lod = std::min(std::log2(footprint_texels), static_cast<double>(mips.size()));
+    const int lower = static_cast<int>(std::floor(lod));
+    const auto blend = static_cast<float>(lod - lower);
+    auto level = [&](int l) {
+        if (l == 0) {
+            return sample(uv);
+        }
+        const Level& m = mips[static_cast<std::size_t>(l - 1)];
+        return bilinear(m.rgb.data(), m.width, m.height, uv);
+    };
+    const glm::vec3 a = level(lower);
+    if (blend <= 0.0f || lower >= static_cast<int>(mips.size())) {
+        return a;
+    }
+    return a * (1.0f - blend) + level(lower + 1) * blend;
+}
+
+void Texture::build_mips() {
+    mips.clear();
+    mips.reserve(32);
+    const float* rgb_level = rgb.data();
+    int w = width;
+    int h = height;
+    while (w > 1 || h > 1) {
+        mips.push_back(halved(rgb_level, w, h));
+        rgb_level = mips.back().rgb.data();
+        w = mips.back().width;
+        h = mips.back().height;
+    }
 }
 
 } // namespace lfprobe

@@ -205,7 +205,8 @@ def bake_from_mesh(
 ):
     """Mesh file → probe set folder, baked with Embree (exact distances, normals, base colour).
     One mesh file is supported per bake. options.extra may hold "supersample" (n×n rays per
-    texel for the colour; left out: the native default). Returns the summary dict, or the running Job with start_only."""
+    texel for the colour; left out: the native default) and "filter_textures" (False: textures
+    point-sampled rather than filtered over each ray's footprint). Returns the summary dict, or the running Job with start_only."""
     if len(mesh_paths) != 1:
         raise ValueError(f"bake --mesh takes one mesh file, got {len(mesh_paths)}")
     placement.validate()
@@ -219,6 +220,8 @@ def bake_from_mesh(
         **placement.native_kwargs(),
         sources_json=json.dumps(sources),
         **({"supersample": int(options.extra["supersample"])} if options.extra.get("supersample") else {}),
+        **({"filter_textures": bool(options.extra["filter_textures"])}
+           if "filter_textures" in options.extra else {}),
     )
     if start_only:
         return job

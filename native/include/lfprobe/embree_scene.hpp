@@ -46,6 +46,11 @@ public:
     // The closest hit in [ray.t_min, ray.t_max] of a ray in the mesh's local frame, with all
     // the attributes filled. Thread-safe.
     [[nodiscard]] MeshHit intersect(const Ray& ray) const;
+    // The same, its base colour's texture filtered over the ray's footprint (texture LOD):
+    // `spread` is the footprint's width per metre along the ray (the angle between a sample's
+    // ray and its neighbour's), widened on a slanted surface by 1/sqrt(cos) (the footprint's
+    // area, its stretch capped at 16 as anisotropic filtering caps it). 0: intersect(ray).
+    [[nodiscard]] MeshHit intersect(const Ray& ray, double spread) const;
     // Only whether and where: t (Embree's float) and the triangle; for throughput figures.
     [[nodiscard]] bool intersect_fast(const Ray& ray, float& t, std::uint32_t& triangle) const;
 

@@ -25,6 +25,11 @@ struct GroundTruthSettings {
     // traces, so that depth comparisons are per ray.
     int samples_per_pixel = 1;
     int tile_size = 32; // pixels per tile side: the unit of parallel work and of progress
+    // Each sample's texture colour filtered over the sample's footprint (an n×n stratum of
+    // the pixel; texture LOD, as a renderer's reference does): n×n samples then estimate the
+    // pixel's mean colour without the textures' own aliasing. False: textures point-sampled
+    // (bilinear at the hit), as before this setting existed.
+    bool filter_textures = true;
 };
 
 struct GroundTruthStats {

@@ -53,6 +53,10 @@ struct Mesh {
     // Linear base colour of triangle `tri` at barycentrics (u, v) (p = (1-u-v)·v0 + u·v1 +
     // v·v2): texture at the interpolated uv × material colour × interpolated vertex colour.
     [[nodiscard]] glm::vec3 base_color(std::size_t tri, float u, float v) const;
+    // The same with the texture filtered over a footprint `footprint` metres wide on the
+    // triangle (texture LOD: a ray's sample covers that much surface, so its colour is the
+    // texture's mean over it, not one texel's). 0: base_color(tri, u, v) exactly.
+    [[nodiscard]] glm::vec3 base_color(std::size_t tri, float u, float v, double footprint) const;
     // Sets `vertices` from world positions read in double: chooses the world offset by the
     // rule scans use (world_offset.hpp) and stores positions relative to it.
     void set_world_vertices(const std::vector<glm::dvec3>& world);

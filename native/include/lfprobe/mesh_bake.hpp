@@ -24,6 +24,9 @@ struct MeshBakeSettings {
     // surface/empty decision stay those of the centre ray, the direction every consumer of the
     // map assumes for the texel.
     int supersample = 4;
+    // Each ray's texture colour filtered over its footprint (a texel, or a texel's n×n
+    // stratum; texture LOD), as the ground truth filters its samples. False: point-sampled.
+    bool filter_textures = true;
 };
 
 // One probe at `position` (the mesh's local frame). Normals are the shading normal (vn) where

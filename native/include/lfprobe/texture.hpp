@@ -34,8 +34,22 @@ struct Texture {
     // of the image file), texel centres at ((x + 0.5) / w, 1 - (y + 0.5) / h); bilinear with
     // repeat wrap in both directions.
     [[nodiscard]] glm::vec3 sample(const glm::vec2& uv) const;
+    // The same, filtered over a footprint `footprint_texels` texels of this image wide, as
+    // texture LOD does: trilinear between the two mip levels around log2 of the footprint. At
+    // most one texel (or without mips) it is sample(uv) exactly.
+    [[nodiscard]] glm::vec3 sample(const glm::vec2& uv, double footprint_texels) const;
     // The linear colour of texel (x, y), y = 0 the top row of the file.
     [[nodiscard]] glm::vec3 texel(int x, int y) const;
+
+    // Box-filtered halvings of the image down to 1×1 (odd sizes round up, the last texel
+    // averaged with the wrapped first, as the sampler wraps); load and from_pixels build them.
+    struct Level {
+        int width = 0;
+        int height = 0;
+        std::vector<float> rgb;
+    };
+    std::vector<Level> mips; // mips[0] is the first halving
+    void build_mips();
 };
 
 } // namespace lfprobe

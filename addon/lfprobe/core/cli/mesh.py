@@ -26,7 +26,8 @@ def _cmd_gt(args) -> int:
     return _run_job(
         args,
         lambda _native: _native.start_ground_truth(
-            args.mesh, args.camera, args.out, spp=args.spp, threads=args.threads),
+            args.mesh, args.camera, args.out, spp=args.spp, threads=args.threads,
+            filter_textures=args.texture_filter == "footprint"),
         lambda stats: (f"ground truth {args.out}: {stats['pixels']} pixels, {stats['hits']} hit, "
                        f"{stats['rays']} rays in {stats['seconds']:.3f} s "
                        f"({stats['rays_per_second'] / 1e6:.2f} M rays/s)"),
@@ -52,6 +53,10 @@ def add_parsers(subparsers) -> None:
     gt.add_argument("--camera", required=True, help="camera JSON file")
     gt.add_argument("--out", required=True, help="output EXR")
     gt.add_argument("--spp", type=int, default=1, help="samples per pixel: 1 or a square (4, 9, ...)")
+    gt.add_argument("--texture-filter", choices=["footprint", "point"], default="footprint",
+                    help="each sample's texture colour: its mean over the sample's footprint (one of "
+                         "the pixel's n×n strata; texture LOD, default) or the texture at the hit "
+                         "alone (point; before 2026-11, n×n samples then alias fine textures)")
     gt.add_argument("--threads", type=int, default=0, help="threads (0: all cores)")
     gt.add_argument("--json", action="store_true", help="print the stats as JSON")
     gt.add_argument("--quiet", action="store_true", help="no progress output")
