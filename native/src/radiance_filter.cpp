@@ -17,6 +17,7 @@ constexpr auto radiance_filter_names = std::to_array<EnumName<RadianceFilter>>({
     {RadianceFilter::Nearest, "nearest"},
     {RadianceFilter::Bilinear, "bilinear"},
     {RadianceFilter::Footprint, "footprint"},
+    {RadianceFilter::Bicubic, "bicubic"},
 });
 
 } // namespace
@@ -24,7 +25,8 @@ constexpr auto radiance_filter_names = std::to_array<EnumName<RadianceFilter>>({
 RadianceFilter radiance_filter_from_name(const std::string& name) {
     return value_named_or_throw(
         radiance_filter_names, name,
-        "radiance filter must be \"nearest\", \"bilinear\" or \"footprint\", got \"" + name + "\"");
+        "radiance filter must be \"nearest\", \"bilinear\", \"footprint\" or \"bicubic\", got \"" +
+            name + "\"");
 }
 
 const char* radiance_filter_name(RadianceFilter filter) {
@@ -40,6 +42,8 @@ namespace {
 
 glm::vec3 same_surface_bilinear(const ProbeMap& map, const glm::dvec3& direction, oct::Texel texel,
                                 double tolerance);
+glm::vec3 same_surface_bicubic(const ProbeMap& map, const glm::dvec3& direction, oct::Texel texel,
+                               double tolerance);
 
 } // namespace
 
@@ -48,6 +52,9 @@ glm::vec3 filtered_radiance(const ProbeMap& map, const glm::dvec3& direction, oc
                             const RadianceFootprint& footprint) {
     if (filter == RadianceFilter::Nearest || map.resolution < 2) {
         return map.radiance_at(oct::texel_index(texel, map.resolution));
+    }
+    if (filter == RadianceFilter::Bicubic) {
+        return same_surface_bicubic(map, direction, texel, tolerance);
     }
     const glm::vec3 fine = same_surface_bilinear(map, direction, texel, tolerance);
     if (filter != RadianceFilter::Footprint || footprint.mips == nullptr ||
@@ -73,6 +80,67 @@ glm::vec3 filtered_radiance(const ProbeMap& map, const glm::dvec3& direction, oc
 }
 
 namespace {
+
+// Whether texel `t`'s stored surface point lies on the plane (point_met, normal_met) within
+// `tolerance`, its normal on the same side: the same surface as the texel met.
+bool on_surface_met(const ProbeMap& map, oct::Texel t, int n, const glm::dvec3& point_met,
+                    const glm::dvec3& normal_met, double tolerance) {
+    const std::size_t k = oct::texel_index(t, n);
+    const double r = static_cast<double>(map.distance_at(k));
+    if (!std::isfinite(r)) {
+        return false; // unknown or empty: no surface to read
+    }
+    const glm::dvec3 point = r * glm::dvec3(oct::texel_direction(t, n));
+    return std::abs(glm::dot(normal_met, point - point_met)) <= tolerance &&
+           glm::dot(glm::dvec3(map.normal_at(k)), normal_met) > 0.0;
+}
+
+// Catmull-Rom weights of the four samples around a point `a` ∈ [0, 1) past the second.
+std::array<float, 4> catmull_rom(float a) {
+    const float a2 = a * a;
+    const float a3 = a2 * a;
+    return {0.5f * (-a3 + 2.0f * a2 - a), 0.5f * (3.0f * a3 - 5.0f * a2 + 2.0f),
+            0.5f * (-3.0f * a3 + 4.0f * a2 + a), 0.5f * (a3 - a2)};
+}
+
+glm::vec3 same_surface_bicubic(const ProbeMap& map, const glm::dvec3& direction, oct::Texel texel,
+                               double tolerance) {
+    const int n = map.resolution;
+    const std::size_t met = oct::texel_index(texel, n);
+    const glm::vec3 base = map.radiance_at(met);
+    const double r_met = static_cast<double>(map.distance_at(met));
+    if (!std::isfinite(r_met) || n < 4) {
+        return same_surface_bilinear(map, direction, texel, tolerance);
+    }
+    const glm::dvec3 normal_met(map.normal_at(met));
+    const glm::dvec3 point_met = r_met * glm::dvec3(oct::texel_direction(texel, n));
+    const glm::vec2 uv = oct::encode(glm::vec3(direction));
+    const float fx = uv.x * static_cast<float>(n) - 0.5f;
+    const float fy = uv.y * static_cast<float>(n) - 0.5f;
+    const auto x0 = static_cast<int>(std::floor(fx));
+    const auto y0 = static_cast<int>(std::floor(fy));
+    const std::array<float, 4> wx = catmull_rom(fx - static_cast<float>(x0));
+    const std::array<float, 4> wy = catmull_rom(fy - static_cast<float>(y0));
+    // Summed as differences from the texel met, so that one colour stays exactly that colour;
+    // the weights sum to one, so no texel may be left out: any other surface (or none) among
+    // the sixteen, and the bilinear's renormalised four read the point instead.
+    glm::vec3 sum{0.0f};
+    for (int j = 0; j < 4; ++j) {
+        for (int i = 0; i < 4; ++i) {
+            const oct::Texel t = oct::wrap_texel(x0 - 1 + i, y0 - 1 + j, n);
+            const std::size_t k = oct::texel_index(t, n);
+            if (k == met) {
+                continue;
+            }
+            if (!on_surface_met(map, t, n, point_met, normal_met, tolerance)) {
+                return same_surface_bilinear(map, direction, texel, tolerance);
+            }
+            sum += (wx[static_cast<std::size_t>(i)] * wy[static_cast<std::size_t>(j)]) *
+                   (map.radiance_at(k) - base);
+        }
+    }
+    return base + sum;
+}
 
 glm::vec3 same_surface_bilinear(const ProbeMap& map, const glm::dvec3& direction, oct::Texel texel,
                                 double tolerance) {

@@ -10,6 +10,10 @@
 // at most a texel; wider, the probe's prefiltered levels (radiance_mips.hpp) at the level whose
 // texels match the sample's width where it meets the surface, interpolated between the two
 // nearest levels, as texture LOD does: one ray per pixel then averages what the pixel sees.
+// Bicubic: the 4×4 texels around the point's direction, Catmull-Rom weights, when all sixteen
+// lie on the surface met; bilinear otherwise (near a silhouette, the unknown or the empty).
+// A texel's radiance is its footprint's mean, so bilinear blurs it a second time; the cubic's
+// negative lobes undo part of that blur.
 #pragma once
 
 #include <string>
@@ -26,9 +30,10 @@ enum class RadianceFilter {
     Nearest,
     Bilinear,
     Footprint,
+    Bicubic,
 };
 
-// "nearest", "bilinear", "footprint"; InputError for anything else.
+// "nearest", "bilinear", "footprint", "bicubic"; InputError for anything else.
 [[nodiscard]] RadianceFilter radiance_filter_from_name(const std::string& name);
 [[nodiscard]] const char* radiance_filter_name(RadianceFilter filter);
 

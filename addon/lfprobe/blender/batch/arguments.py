@@ -96,9 +96,9 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--threads", type=int, default=None, help="cores (0: all); the image is the same")
     render.add_argument("--spp", type=int, default=None, metavar="N",
                         help="samples per pixel, 1 or a square (default: the scene's Pixel Samples squared)")
-    render.add_argument("--filter", choices=["nearest", "bilinear", "footprint"], default=None,
-                        help="a hit's colour: its texel, interpolated on the same surface, or averaged over the "
-                             "pixel's footprint (default: the scene's)")
+    render.add_argument("--filter", choices=["nearest", "bilinear", "footprint", "bicubic"], default=None,
+                        help="a hit's colour: its texel, interpolated on the same surface (bilinear, or bicubic: "
+                             "Catmull-Rom, sharper), or averaged over the pixel's footprint (default: the scene's)")
     render.add_argument("--blend", type=int, default=None, metavar="N",
                         help="probes a hit's colour is blended from, 1-8 (default: the scene's)")
     render.add_argument("--camera-json", metavar="CAM.json", help="also write the camera file used")

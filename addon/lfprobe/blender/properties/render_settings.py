@@ -87,6 +87,9 @@ class LFProbeRenderSettings(bpy.types.PropertyGroup):
             ("footprint", "Footprint",
              "As bilinear, and where a pixel spans several texels, the probe's prefiltered radiance at the "
              "pixel's width: anti-aliases one ray per pixel, as texture LOD does"),
+            ("bicubic", "Bicubic",
+             "Catmull-Rom over the 4×4 texels around a hit where all lie on its surface, else bilinear: "
+             "sharper than bilinear, which blurs texels that already average their footprint"),
         ),
         default=defaults.trace("filter"),
         update=_redraw_viewports,

@@ -58,6 +58,8 @@ def _cmd_bake(args) -> int:
             raise ValueError("--scheduler and --workers bake from scans (--scan); bake a mesh locally")
         if args.supersample is not None:
             options.extra["supersample"] = args.supersample
+        if args.texture_filter is not None:
+            options.extra["filter_textures"] = args.texture_filter == "footprint"
         summary = bake_from_mesh(args.mesh, args.out, placement, options, progress)
         summary.setdefault("points", 0)
         return _print_bake_summary(args, summary, f"{args.mesh[0]}")
@@ -177,12 +179,14 @@ def add_fidelity_arguments(parser) -> None:
                         help="samples per pixel: 1 (default) or a square (4, 9, 16, ...), the ground "
                              "truth's stratified pattern; colour and coverage are averaged, depth, status, "
                              "probe from the pixel centre, steps summed over the pixel's rays")
-    parser.add_argument("--filter", choices=["nearest", "bilinear", "footprint"], default=None,
+    parser.add_argument("--filter", choices=["nearest", "bilinear", "footprint", "bicubic"], default=None,
                         help="a HIT's colour: its texel (nearest) or interpolated between the texels "
                              "around it on the same surface (bilinear, default); footprint: as "
                              "bilinear, and where a sample spans more than a texel, the probe's "
                              "prefiltered radiance at the sample's width (one ray per pixel "
-                             "anti-aliased, as texture LOD does)")
+                             "anti-aliased, as texture LOD does); bicubic: Catmull-Rom over the 4×4 "
+                             "texels around it where all lie on the surface, else bilinear (sharper: "
+                             "undoes part of the texels' own averaging)")
     parser.add_argument("--blend", type=int, default=None, metavar="N",
                         help="probes a HIT's colour is blended from, weighted by how finely each sees the "
                              "point (1: the first probe that answers, as the paper; default 4; at most 8)")
@@ -272,6 +276,9 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--supersample", type=int, default=None, metavar="N",
                       help="--mesh: n×n rays per texel for its colour, counting only those that meet "
                            "the centre ray's surface (default 4; 1: the centre ray alone)")
+    bake.add_argument("--texture-filter", choices=["footprint", "point"], default=None,
+                      help="--mesh: each ray's texture colour is its mean over the ray's footprint "
+                           "(texture LOD, default) or the texture at the hit alone (point)")
     add_placement_arguments(bake)
     bake.add_argument("--res", type=int, default=defaults.bake("resolution"), help="octahedral map resolution N (N×N texels)")
     bake.add_argument("--out", required=True, metavar="DIR", help="probe set folder to write")

@@ -156,6 +156,31 @@ def psnr_only(reference: dict, test: dict) -> float:
     return metrics.psnr(metrics.visible_colour(reference), metrics.visible_colour(test))
 
 
+def silhouette_pixels(image: dict, relative_step: float = 0.03) -> np.ndarray:
+    """Pixels beside a depth step (their centre depth and a 4-neighbour's differ by more than
+    `relative_step` of the nearer): where a silhouette crosses the pixel or its neighbour."""
+    depth = np.asarray(image["depth"], np.float64).reshape(int(image["height"]), int(image["width"]))
+    hit = np.isfinite(depth) & (depth > 0)
+    depth = np.where(hit, depth, np.inf)
+    mask = np.zeros(depth.shape, bool)
+    for a, b, pick in ((depth[:, 1:], depth[:, :-1], (slice(None), slice(1, None))),
+                       (depth[1:], depth[:-1], (slice(1, None), slice(None)))):
+        with np.errstate(invalid="ignore"):
+            step = ~(np.abs(a - b) <= relative_step * np.minimum(a, b))
+        mask[pick] |= step
+        mask[tuple(slice(None, -1) if p.start == 1 else p for p in pick)] |= step
+    return mask
+
+
+def error_share(reference: dict, test: dict, mask: np.ndarray) -> float:
+    """The fraction of the squared error (sRGB, as psnr) that the pixels of `mask` carry."""
+    ref = metrics.srgb_encode(metrics.visible_colour(reference))
+    got = metrics.srgb_encode(metrics.visible_colour(test))
+    squared = ((ref - got) ** 2).sum(axis=-1)
+    total = float(squared.sum())
+    return float(squared[mask].sum()) / total if total > 0 else 0.0
+
+
 def timing(stats: dict, pixels: int) -> Dict[str, float]:
     """Frame time, rays per second (every ray traced, samples included, where the stats count
     them) and pixels per second."""

@@ -153,7 +153,10 @@ def _at_probe_section(page, data: Dict[str, object], img, findings) -> None:
                    "truth's n×n stratified samples per pixel, and both average them; 'PSNR vs converged' compares the "
                    "same render with a ground truth of many more samples, free of the n×n ground truth's own aliasing "
                    "(its score against the converged one is the 'gt itself' column). 'nearest' reads the texel met "
-                   "(the paper), 'bilinear' interpolates between the texels around the hit on the same surface. "
+                   "(the paper), 'bilinear' interpolates between the texels around the hit on the same surface, "
+                   "'bicubic' does so with Catmull-Rom weights over 4×4 texels. Both sides filter textures over each "
+                   "sample's footprint (texture LOD). 'error at silhouettes': the share of the squared error against "
+                   "the converged ground truth in pixels beside a depth step. "
                    "'1 spp' is one sample per pixel on both sides, the unfiltered comparison.", "note")
     img("at_probe_psnr.png", "PSNR [dB] against probe resolution N", 520)
     findings("at_probe")
@@ -162,6 +165,7 @@ def _at_probe_section(page, data: Dict[str, object], img, findings) -> None:
                                       ("spp", "spp", num(".0f")), ("psnr", "PSNR dB (matched)", num(".2f")),
                                       ("psnr_vs_converged_gt", "PSNR dB vs converged", num(".2f")),
                                       ("gt_psnr_vs_converged_gt", "gt itself vs converged", num(".2f")),
+                                      ("silhouette_error_share", "error at silhouettes", num(".0%")),
                                       ("psnr_one_sample_per_pixel", "PSNR dB (1 spp)", num(".2f")),
                                       ("psnr_one_sample_vs_filtered_gt", "PSNR dB (1 spp vs filtered GT)", num(".2f")),
                                       ("psnr_footprint_one_sample_vs_filtered_gt",

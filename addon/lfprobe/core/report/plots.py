@@ -121,9 +121,10 @@ def error_vs_resolution(rows: Sequence[Dict[str, object]], metric: str) -> bytes
 
 def at_probe(rows: Sequence[Dict[str, object]]) -> bytes:
     figure, axes = plt.subplots(figsize=(7.0, 4.2))
+    styles = {"bilinear": ("o", "-"), "bicubic": ("s", "--"), "nearest": ("x", ":")}
     _plot_series(axes, rows, lambda r: f"view {r['view']}, {r['filter']}", "resolution", "psnr",
-                 lambda key: dict(marker="o" if key.endswith("bilinear") else "x",
-                                  linestyle="-" if key.endswith("bilinear") else ":", label=key))
+                 lambda key: dict(marker=styles.get(key.rsplit(", ", 1)[-1], ("x", ":"))[0],
+                                  linestyle=styles.get(key.rsplit(", ", 1)[-1], ("x", ":"))[1], label=key))
     _resolution_axis(axes, rows)
     axes.set_xlabel("mesh-baked probe resolution N (N×N), log scale")
     axes.set_ylabel("PSNR, matched samples per pixel [dB]")

@@ -124,17 +124,30 @@ def _findings(data: Dict[str, object], reference: Optional[Dict[str, object]]) -
             gt_noise = top["gt_psnr_vs_converged_gt"]
             limit = ("the ground truth's own sampling noise" if top["psnr_vs_converged_gt"] > gt_noise
                      else "the map's resolution")
-            f["at_probe"].append(
+            at_top = {r.get("filter"): r for r in rows if r["resolution"] == top["resolution"]}
+            filters = ", ".join(f"{name} {r['psnr']:.2f} dB" for name, r in at_top.items())
+            sentence = (
                 f"View '{view}', eye at the probe's centre, mesh-baked probe, bilinear, {top['spp']} samples per "
                 f"pixel on both sides: PSNR {pts[0][1]:.2f} dB at {pts[0][0]}² rising to {pts[-1][1]:.2f} dB at "
-                f"{pts[-1][0]}² ({gain:+.2f} dB per doubling of the resolution); against a converged ground truth "
+                f"{pts[-1][0]}² ({gain:+.2f} dB per doubling of the resolution); at {top['resolution']}² by filter: "
+                f"{filters}. Against a converged ground truth "
                 f"({top['reference_spp']} samples) {top['psnr_vs_converged_gt']:.2f} dB at {top['resolution']}², "
                 f"where the {top['spp']}-sample ground truth itself scores {gt_noise:.2f} dB: what limits the error "
-                f"there is {limit}. One sample per pixel on both sides gives "
+                f"there is {limit}.")
+            if "silhouette_error_share" in top:
+                sentence += (
+                    f" The pixels at silhouettes ({100 * top['silhouette_pixels']:.1f} % of the view) carry "
+                    f"{100 * top['silhouette_error_share']:.0f} % of the probe's squared error against the converged "
+                    f"ground truth (a texel decides which surface a sample sees, so an edge steps at the texels' "
+                    f"pitch), and {100 * top['gt_silhouette_error_share']:.0f} % of the {top['spp']}-sample ground "
+                    f"truth's own.")
+            sentence += (
+                f" One sample per pixel on both sides gives "
                 f"{top['psnr_one_sample_per_pixel']:.2f} dB: aliasing, not the probe. One sample per pixel against "
                 f"the {top['spp']}-sample ground truth: {top['psnr_one_sample_vs_filtered_gt']:.2f} dB bilinear, "
                 f"{top['psnr_footprint_one_sample_vs_filtered_gt']:.2f} dB with the footprint filter (the probe's "
                 f"prefiltered radiance at the pixel's width).")
+            f["at_probe"].append(sentence)
     groups: Dict[tuple, List[Dict[str, object]]] = {}
     for r in data["distance"]:
         groups.setdefault((r["source"], r["view"]), []).append(r)

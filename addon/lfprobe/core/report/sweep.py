@@ -17,7 +17,8 @@ import numpy as np
 from .. import pipeline
 from ..pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh
 from ..embree_rates import embree_rates
-from .measure import RunContext, measure, nearest_probe_distance, pixel_count, psnr_only, timing
+from .measure import (RunContext, error_share, measure, nearest_probe_distance, pixel_count, psnr_only,
+                      silhouette_pixels, timing)
 from .presets import BAKE_VARIANTS, COMPACT_TRACE, DEFAULT_TRACE, LOAD_KEYS
 from .scene import grid_positions
 
@@ -367,7 +368,8 @@ class Sweep:
                 footprint_image, _ = ctx.render_probes(field, camera, {**DEFAULT_TRACE[1], "filter": "footprint"},
                                                        spp=1, repeats=1)
                 footprint_psnr = psnr_only(gt, footprint_image)
-                for radiance_filter in ("nearest", "bilinear"):
+                silhouettes = silhouette_pixels(converged)
+                for radiance_filter in ("nearest", "bilinear", "bicubic"):
                     trace = {**DEFAULT_TRACE[1], "filter": radiance_filter}
                     image, stats = ctx.render_probes(field, camera, trace)
                     figures, _ = measure(gt, image)
@@ -380,6 +382,9 @@ class Sweep:
                         "psnr": figures["psnr"], "ssim": figures["ssim"], "flip": figures["flip"],
                         "psnr_vs_converged_gt": psnr_only(converged, image),
                         "gt_psnr_vs_converged_gt": psnr_only(converged, gt),
+                        "silhouette_pixels": float(silhouettes.mean()),
+                        "silhouette_error_share": error_share(converged, image, silhouettes),
+                        "gt_silhouette_error_share": error_share(converged, gt, silhouettes),
                         "psnr_one_sample_per_pixel": psnr_only(gt_centre, centre_image),
                         "psnr_one_sample_vs_filtered_gt": psnr_only(gt, centre_image),
                         "psnr_footprint_one_sample_vs_filtered_gt": footprint_psnr,
