@@ -214,6 +214,39 @@ def test_findings_quote_the_measured_figures(tiny_report):
     assert sentence in result.stdout
 
 
+def test_mesh_probe_rows_measure_every_filter_and_the_error_at_silhouettes(tiny_report):
+    _, data, _ = tiny_report
+    filters = {r["filter"] for r in data["at_probe"]}
+    assert filters == {"nearest", "bilinear", "bicubic"}
+    for r in data["at_probe"]:
+        assert 0.0 < r["silhouette_pixels"] < 1.0
+        assert 0.0 <= r["silhouette_error_share"] <= 1.0
+        assert 0.0 <= r["gt_silhouette_error_share"] <= 1.0
+    assert "at silhouettes" in data["findings"]["at_probe"][0]
+
+
+def test_silhouette_pixels_are_those_beside_a_depth_step_and_carry_their_share_of_the_error():
+    import numpy as np
+
+    from lfprobe.core.report.measure import error_share, silhouette_pixels
+
+    depth = np.ones((4, 6), np.float32)
+    depth[:, 4:] = 2.0  # a step between columns 3 and 4
+    depth[0, 0] = np.inf  # no hit: a step too
+    image = {"depth": depth, "width": 6, "height": 4}
+    mask = silhouette_pixels(image)
+    expected = np.zeros((4, 6), bool)
+    expected[:, 3:5] = True
+    expected[0, 0] = expected[0, 1] = expected[1, 0] = True
+    assert (mask == expected).all()
+    status = np.full((4, 6), metrics.STATUS_HIT, np.uint8)
+    reference = {"rgba": np.zeros((4, 6, 4), np.float32), "status": status}
+    test = {"rgba": np.zeros((4, 6, 4), np.float32), "status": status}
+    test["rgba"][0, 3, :3] = 0.5  # an error at a silhouette pixel
+    test["rgba"][2, 1, :3] = 0.5  # and the same error away from one
+    assert error_share(reference, test, mask) == pytest.approx(0.5)
+
+
 def test_mesh_probe_from_its_own_centre_reproduces_ground_truth_up_to_its_resolution(native, scene_path, tmp_path):
     """Eye at a mesh-baked probe's centre, 160×120 view (0.46° pixels), against the pixel-centre
     ground truth: PSNR grows by at least 2 dB per doubling of the map and reaches 35 dB at 1024²
