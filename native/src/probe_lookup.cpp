@@ -115,6 +115,17 @@ ProbeTraceResult ProbeLookup::lookup(const glm::dvec3& direction, double t_min,
     return result;
 }
 
+ProbeTraceResult ProbeLookup::lookup_texel(const glm::dvec3& direction, oct::Texel texel,
+                                           double t_min, double t_max) const {
+    ProbeTraceResult result;
+    Aim a;
+    aim(direction, a);
+    a.texel = texel;
+    a.index = oct::texel_index(texel, n_);
+    judge(a, t_min, t_max, result);
+    return result;
+}
+
 void ProbeLookup::lookup_batch(const Ray* rays, std::size_t count,
                                ProbeTraceResult* results) const {
     std::array<Aim, kBatch> aims;

@@ -199,4 +199,71 @@ glm::vec3 same_surface_bilinear(const ProbeMap& map, const glm::dvec3& direction
 
 } // namespace
 
+oct::Texel majority_surface_texel(const ProbeMap& map, const glm::dvec3& direction, oct::Texel met,
+                                  double tolerance) {
+    const int n = map.resolution;
+    if (n < 2) {
+        return met;
+    }
+    const glm::vec2 uv = oct::encode(glm::vec3(direction));
+    const float fx = uv.x * static_cast<float>(n) - 0.5f;
+    const float fy = uv.y * static_cast<float>(n) - 0.5f;
+    const float x0 = std::floor(fx);
+    const float y0 = std::floor(fy);
+    const float ax = fx - x0;
+    const float ay = fy - y0;
+    std::array<oct::Texel, 4> texels{};
+    std::array<float, 4> weights{};
+    for (int j = 0; j < 2; ++j) {
+        for (int i = 0; i < 2; ++i) {
+            const auto q = static_cast<std::size_t>(2 * j + i);
+            texels[q] = oct::wrap_texel(static_cast<int>(x0) + i, static_cast<int>(y0) + j, n);
+            weights[q] = (i == 1 ? ax : 1.0f - ax) * (j == 1 ? ay : 1.0f - ay);
+        }
+    }
+    // Same surface, or both empty; an unknown texel is of no group.
+    const auto together = [&](oct::Texel a, oct::Texel b) {
+        const std::size_t ia = oct::texel_index(a, n);
+        const double ra = static_cast<double>(map.distance_at(ia));
+        const double rb = static_cast<double>(map.distance_at(oct::texel_index(b, n)));
+        if (std::isinf(ra) || std::isinf(rb)) {
+            return std::isinf(ra) && std::isinf(rb);
+        }
+        if (std::isnan(ra) || std::isnan(rb)) {
+            return false;
+        }
+        const glm::dvec3 normal(map.normal_at(ia));
+        return on_surface_met(map, b, n, ra * glm::dvec3(oct::texel_direction(a, n)), normal,
+                              tolerance);
+    };
+    const auto group_weight = [&](oct::Texel of) {
+        float sum = 0.0f;
+        for (std::size_t q = 0; q < 4; ++q) {
+            sum += together(of, texels[q]) ? weights[q] : 0.0f;
+        }
+        return sum;
+    };
+    const float own = group_weight(met);
+    if (own >= 0.5f) {
+        return met; // the common case: the met texel's surface holds the majority
+    }
+    // The heaviest other group, by its heaviest texel (fixed order: ties keep the first).
+    oct::Texel best = met;
+    float best_group = own;
+    float best_texel = 0.0f;
+    for (std::size_t q = 0; q < 4; ++q) {
+        const std::size_t k = oct::texel_index(texels[q], n);
+        if (std::isnan(map.distance_at(k)) || together(met, texels[q])) {
+            continue;
+        }
+        const float group = group_weight(texels[q]);
+        if (group > best_group || (group == best_group && weights[q] > best_texel && best != met)) {
+            best = texels[q];
+            best_group = group;
+            best_texel = weights[q];
+        }
+    }
+    return best;
+}
+
 } // namespace lfprobe

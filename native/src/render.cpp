@@ -124,6 +124,9 @@ public:
             if (answers[k].status == TraceStatus::Unknown) {
                 hits[k] = field_.trace(rays[k], trace_);
             } else {
+                if (trace_.filter != RadianceFilter::Nearest) {
+                    refine_at_edge(rays[k], answers[k]);
+                }
                 set_from_eye_probe(hits[k], answers[k], eye_.index);
                 if (trace_.filter != RadianceFilter::Nearest &&
                     answers[k].status == TraceStatus::Hit) {
@@ -140,6 +143,40 @@ public:
                 }
             }
         }
+    }
+
+    // The eye probe's answer judged again on the texel whose surface holds most of the
+    // bilinear weight around the ray (majority_surface_texel), where that is another texel: the
+    // filters read the colour at the ray's exact direction, and this reads the surface there
+    // too. Nearest keeps the paper's texel.
+    void refine_at_edge(const Ray& ray, ProbeTraceResult& answer) const {
+        if (answer.status != TraceStatus::Hit && answer.status != TraceStatus::Miss) {
+            return;
+        }
+        const oct::Texel met =
+            answer.status == TraceStatus::Hit ? answer.texel : eye_texel(ray.direction);
+        const ProbeMap& map = field_.probe(static_cast<std::size_t>(eye_.index));
+        const double distance =
+            static_cast<double>(map.distance_at(oct::texel_index(met, map.resolution)));
+        if (std::isnan(distance)) {
+            return;
+        }
+        const double tolerance = std::isfinite(distance)
+                                     ? surface_thickness(trace_.probe, distance, map.resolution)
+                                     : 0.0;
+        const oct::Texel seen = majority_surface_texel(map, ray.direction, met, tolerance);
+        if (seen.x != met.x || seen.y != met.y) {
+            const ProbeTraceResult other =
+                eye_.lookup->lookup_texel(ray.direction, seen, ray.t_min, ray.t_max);
+            if (other.status != TraceStatus::Unknown) {
+                answer = other;
+            }
+        }
+    }
+
+    [[nodiscard]] oct::Texel eye_texel(const glm::dvec3& direction) const {
+        const ProbeMap& map = field_.probe(static_cast<std::size_t>(eye_.index));
+        return oct::texel_of_direction(glm::vec3(glm::normalize(direction)), map.resolution);
     }
 
     // Traces rays[0, count), any count, a batch at a time, calling each(k, answer of ray k).

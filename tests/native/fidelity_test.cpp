@@ -4,6 +4,7 @@
 // one-sample first-hit image that spp 1, nearest, blend 1 must reproduce bit for bit.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <utility>
 #include <vector>
 
@@ -167,6 +168,37 @@ TEST(Fidelity, BilinearBicubicAndBlendingNeverMixAForegroundAndABackgroundSurfac
             EXPECT_GT(on_wall, 100u);
         }
     }
+}
+
+TEST(Fidelity, ASilhouetteSeenFromTheProbeIsCutAtTheRaysDirectionNotAtTheTexels) {
+    // From the probe's centre, 4×4 samples a pixel over the plate's corner: a coarse probe's
+    // pixels against those of a probe 8 times as fine (its edges within an eighth of the coarse
+    // texel). The texel a ray falls in cuts the plate's slanted edges in steps a texel high;
+    // the surface with most of the bilinear weight around the ray follows the edge closer.
+    const glm::dvec3 centre{0.0, 0.0, 0.0};
+    const Camera camera = Camera::look_at(centre, {1.0, 0.27, 0.25}, 40, 40, 60.0);
+    const auto view = [&](int n, RadianceFilter filter) {
+        std::vector<ProbeMap> probes;
+        probes.push_back(plate_probe(centre, n));
+        const ProbeField field(positions_placement({centre}), std::move(probes));
+        return render_probe_view(field, camera, fidelity(16, filter, 1, FieldMode::Nearest));
+    };
+    const RenderedImage fine = view(512, RadianceFilter::Nearest);
+    const auto error = [&](const RenderedImage& image) {
+        double sum = 0.0;
+        for (std::size_t i = 0; i < image.pixel_count(); ++i) {
+            sum += std::abs(image.rgba[4 * i] - fine.rgba[4 * i]);
+        }
+        return sum / static_cast<double>(image.pixel_count());
+    };
+    const double nearest = error(view(64, RadianceFilter::Nearest));
+    const double bilinear = error(view(64, RadianceFilter::Bilinear));
+    const double bicubic = error(view(64, RadianceFilter::Bicubic));
+    std::printf("plate edge, mean |red - fine red|: nearest %.5f, bilinear %.5f, bicubic %.5f\n",
+                nearest, bilinear, bicubic);
+    EXPECT_GT(nearest, 0.005);          // the edge crosses enough pixels to measure
+    EXPECT_LT(bilinear, 0.9 * nearest); // measured 0.85×
+    EXPECT_LT(bicubic, 0.9 * nearest);
 }
 
 TEST(Fidelity, BlendingIsOrderIndependentAndBitIdenticalForOneAndTwoThreads) {

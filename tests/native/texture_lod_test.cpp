@@ -26,7 +26,8 @@ Texture checkerboard(int w, int h, int square = 1) {
                 pixels[(static_cast<std::size_t>(y) * static_cast<std::size_t>(w) +
                         static_cast<std::size_t>(x)) *
                            3 +
-                       static_cast<std::size_t>(c)] = static_cast<float>((x / square + y / square) % 2);
+                       static_cast<std::size_t>(c)] =
+                    static_cast<float>((x / square + y / square) % 2);
             }
         }
     }

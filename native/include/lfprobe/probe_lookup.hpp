@@ -44,6 +44,11 @@ public:
     // intervals are read: every ray starts at the probe centre.
     void lookup_batch(const Ray* rays, std::size_t count, ProbeTraceResult* results) const;
 
+    // lookup() judged on `texel` instead of the texel the direction falls in: where a filter
+    // has decided, at finer than a texel, that the ray sees a neighbouring texel's surface.
+    [[nodiscard]] ProbeTraceResult lookup_texel(const glm::dvec3& direction, oct::Texel texel,
+                                                double t_min, double t_max) const;
+
 private:
     // A ray's unit direction and the texel it looks into.
     struct Aim {

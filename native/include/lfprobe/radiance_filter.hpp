@@ -53,6 +53,17 @@ struct RadianceFootprint {
 [[nodiscard]] double footprint_in_texels(double eye_distance, double sample_angle,
                                          double probe_distance, int n);
 
+// Which texel's surface a ray from the probe centre in `direction` sees, at finer than a
+// texel: the four texels around the direction (the bilinear cell) are grouped by surface (the
+// same-surface test of the filters, within `tolerance` of a plane, normals on the same side;
+// the empty texels as one group; an unknown texel in none), and the ray sees the group that
+// holds most of the four's bilinear weight. Returns `met` (the texel the direction falls in)
+// unless another group outweighs its own; then that group's heaviest texel. The texel the
+// direction falls in decides an edge half-way between texel centres along each axis, so a
+// slanted edge steps at the texels' pitch; the weight's majority cuts the steps' corners.
+[[nodiscard]] oct::Texel majority_surface_texel(const ProbeMap& map, const glm::dvec3& direction,
+                                                oct::Texel met, double tolerance);
+
 [[nodiscard]] glm::vec3 filtered_radiance(const ProbeMap& map, const glm::dvec3& direction,
                                           oct::Texel texel, double tolerance, RadianceFilter filter,
                                           const RadianceFootprint& footprint = {});
