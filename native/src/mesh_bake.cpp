@@ -35,9 +35,43 @@ void check_settings(const MeshBakeSettings& s) {
 // same side): the texel's distance and normal are the centre's, so its colour must be that
 // surface's, never a mix with what lies behind a silhouette. Summed as differences from the
 // centre's colour, so that a surface of one colour stays exactly that colour.
-glm::vec3 texel_footprint_colour(const EmbreeScene& scene, const glm::dvec3& position,
-                                 oct::Texel texel, int n, int ss, const MeshHit& centre,
-                                 const glm::dvec3& normal, double spread) {
+// The ray through the centre of stratum (sx, sy) of an ss×ss grid across texel `texel`.
+Ray stratum_ray(const glm::dvec3& position, oct::Texel texel, int n, int ss, int sx, int sy) {
+    const glm::vec2 uv{
+        (static_cast<float>(texel.x) + (static_cast<float>(sx) + 0.5f) / static_cast<float>(ss)) /
+            static_cast<float>(n),
+        (static_cast<float>(texel.y) + (static_cast<float>(sy) + 0.5f) / static_cast<float>(ss)) /
+            static_cast<float>(n)};
+    Ray sub;
+    sub.origin = position;
+    sub.direction = glm::dvec3(oct::decode(uv));
+    return sub;
+}
+
+// The share of an empty texel's ss×ss rays that meet nothing either: its coverage.
+float empty_coverage(const EmbreeScene& scene, const glm::dvec3& position, oct::Texel texel, int n,
+                     int ss) {
+    int empty = 0;
+    for (int sy = 0; sy < ss; ++sy) {
+        for (int sx = 0; sx < ss; ++sx) {
+            float t = 0.0f;
+            std::uint32_t triangle = 0;
+            empty += scene.intersect_fast(stratum_ray(position, texel, n, ss, sx, sy), t, triangle)
+                         ? 0
+                         : 1;
+        }
+    }
+    return static_cast<float>(empty) / static_cast<float>(ss * ss);
+}
+
+struct TexelFootprint {
+    glm::vec3 colour;
+    float coverage; // the share of the ss×ss rays that met the centre ray's surface
+};
+
+TexelFootprint texel_footprint(const EmbreeScene& scene, const glm::dvec3& position,
+                               oct::Texel texel, int n, int ss, const MeshHit& centre,
+                               const glm::dvec3& normal, double spread) {
     const double distance_scale = centre.t * oct::kTexelAngleTimesN / n; // the texel's footprint
     const double same_surface = 1e-4 + 2.0 * distance_scale;
     const glm::dvec3 centre_point =
@@ -46,15 +80,7 @@ glm::vec3 texel_footprint_colour(const EmbreeScene& scene, const glm::dvec3& pos
     int counted = 0;
     for (int sy = 0; sy < ss; ++sy) {
         for (int sx = 0; sx < ss; ++sx) {
-            const glm::vec2 uv{(static_cast<float>(texel.x) +
-                                (static_cast<float>(sx) + 0.5f) / static_cast<float>(ss)) /
-                                   static_cast<float>(n),
-                               (static_cast<float>(texel.y) +
-                                (static_cast<float>(sy) + 0.5f) / static_cast<float>(ss)) /
-                                   static_cast<float>(n)};
-            Ray sub;
-            sub.origin = position;
-            sub.direction = glm::dvec3(oct::decode(uv));
+            const Ray sub = stratum_ray(position, texel, n, ss, sx, sy);
             const MeshHit h = scene.intersect(sub, spread);
             if (!h.hit) {
                 continue;
@@ -69,7 +95,9 @@ glm::vec3 texel_footprint_colour(const EmbreeScene& scene, const glm::dvec3& pos
             ++counted;
         }
     }
-    return counted > 0 ? centre.base_color + sum / static_cast<float>(counted) : centre.base_color;
+    const glm::vec3 colour =
+        counted > 0 ? centre.base_color + sum / static_cast<float>(counted) : centre.base_color;
+    return {colour, static_cast<float>(counted) / static_cast<float>(ss * ss)};
 }
 
 } // namespace
@@ -83,6 +111,9 @@ ProbeMap bake_probe_from_mesh(const EmbreeScene& scene, const glm::dvec3& positi
     // stratum of its texel).
     const double spread = settings.filter_textures ? oct::kTexelAngleTimesN / n / ss : 0.0;
     ProbeMap map(n, position);
+    if (ss > 1) {
+        map.coverage.assign(map.texel_count(), Imath::half(1.0f));
+    }
     if (progress != nullptr) {
         progress->begin_stage("baking probe from mesh", static_cast<std::uint64_t>(n));
     }
@@ -100,13 +131,19 @@ ProbeMap bake_probe_from_mesh(const EmbreeScene& scene, const glm::dvec3& positi
                 const MeshHit centre = scene.intersect(ray, spread);
                 if (!centre.hit) {
                     map.set_empty(i);
+                    if (ss > 1) {
+                        map.coverage[i] =
+                            Imath::half(empty_coverage(scene, position, texel, n, ss));
+                    }
                     continue;
                 }
                 const glm::vec3 normal = EmbreeScene::facing(centre.shading_normal, ray.direction);
                 glm::vec3 colour = centre.base_color;
                 if (ss > 1) {
-                    colour = texel_footprint_colour(scene, position, texel, n, ss, centre,
-                                                    glm::dvec3(normal), spread);
+                    const TexelFootprint footprint = texel_footprint(
+                        scene, position, texel, n, ss, centre, glm::dvec3(normal), spread);
+                    colour = footprint.colour;
+                    map.coverage[i] = Imath::half(footprint.coverage);
                 }
                 map.set_surface(i, static_cast<float>(centre.t), colour, normal, 1.0f);
             }

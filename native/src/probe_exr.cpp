@@ -24,6 +24,8 @@ namespace {
 constexpr const char* kFormatAttribute = "lfprobe/format";
 constexpr const char* kFormatValue = "lfprobe-probe 1";
 constexpr const char* kPositionAttribute = "lfprobe/position";
+// Optional: written only for maps that know their texels' coverage (ProbeMap::coverage).
+constexpr const char* kCoverageChannel = "coverage";
 
 void use_all_cores_for_exr() {
     static std::once_flag once;
@@ -50,6 +52,11 @@ Imf::FrameBuffer probe_frame_buffer(ProbeMap& map) {
                   Imf::Slice(Imf::HALF, reinterpret_cast<char*>(map.normal.data() + c),
                              3 * sizeof(Imath::half), 3 * sizeof(Imath::half) * n));
     }
+    if (!map.coverage.empty()) {
+        fb.insert(kCoverageChannel,
+                  Imf::Slice(Imf::HALF, reinterpret_cast<char*>(map.coverage.data()),
+                             sizeof(Imath::half), sizeof(Imath::half) * n));
+    }
     return fb;
 }
 
@@ -64,6 +71,9 @@ void write_probe_exr(const std::string& path, const ProbeMap& map) {
         header.channels().insert(name, Imf::Channel(Imf::HALF));
     }
     header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
+    if (!map.coverage.empty()) {
+        header.channels().insert(kCoverageChannel, Imf::Channel(Imf::HALF));
+    }
     header.insert(kFormatAttribute, Imf::StringAttribute(kFormatValue));
     header.insert(kPositionAttribute,
                   Imf::V3dAttribute(Imath::V3d(map.position.x, map.position.y, map.position.z)));
@@ -99,6 +109,13 @@ void require_meaningful_texels(const ProbeMap& map, const std::string& path) {
         if (d < 0.0f) {
             throw InputError(where(i) + ": distance " + std::to_string(d) +
                              " (expected 0 or more metres, NaN for unknown, +inf for empty)");
+        }
+        if (!map.coverage.empty()) {
+            const float coverage = static_cast<float>(map.coverage[i]);
+            if (!(coverage >= 0.0f && coverage <= 1.0f)) {
+                throw InputError(where(i) + ": coverage " + std::to_string(coverage) +
+                                 " (expected a number from 0 to 1)");
+            }
         }
         const float confidence = static_cast<float>(map.rgba[4 * i + 3]);
         if (!(confidence >= 0.0f && confidence <= 1.0f)) {
@@ -147,6 +164,9 @@ ProbeMap read_probe_exr(const std::string& path) {
             position = glm::dvec3(attr->value().x, attr->value().y, attr->value().z);
         }
         ProbeMap map(w, position);
+        if (channels.findChannel(kCoverageChannel) != nullptr) {
+            map.coverage.assign(map.texel_count(), Imath::half(1.0f));
+        }
         file.setFrameBuffer(probe_frame_buffer(map));
         file.readPixels(window.min.y, window.max.y);
         require_meaningful_texels(map, path);

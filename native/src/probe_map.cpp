@@ -49,7 +49,8 @@ bool ProbeMap::is_complete() const {
 
 std::size_t ProbeMap::memory_bytes() const {
     return rgba.size() * sizeof(Imath::half) + distance.size() * sizeof(float) +
-           normal.size() * sizeof(Imath::half) + packed.memory_bytes();
+           normal.size() * sizeof(Imath::half) + coverage.size() * sizeof(Imath::half) +
+           packed.memory_bytes();
 }
 
 ProbeCoverage coverage_of(const ProbeMap& map) {

@@ -214,11 +214,13 @@ oct::Texel majority_surface_texel(const ProbeMap& map, const glm::dvec3& directi
     const float ay = fy - y0;
     std::array<oct::Texel, 4> texels{};
     std::array<float, 4> weights{};
+    std::array<float, 4> coverages{};
     for (int j = 0; j < 2; ++j) {
         for (int i = 0; i < 2; ++i) {
             const auto q = static_cast<std::size_t>(2 * j + i);
             texels[q] = oct::wrap_texel(static_cast<int>(x0) + i, static_cast<int>(y0) + j, n);
             weights[q] = (i == 1 ? ax : 1.0f - ax) * (j == 1 ? ay : 1.0f - ay);
+            coverages[q] = map.coverage_at(oct::texel_index(texels[q], n));
         }
     }
     // Same surface, or both empty; an unknown texel is of no group.
@@ -236,31 +238,39 @@ oct::Texel majority_surface_texel(const ProbeMap& map, const glm::dvec3& directi
         return on_surface_met(map, b, n, ra * glm::dvec3(oct::texel_direction(a, n)), normal,
                               tolerance);
     };
-    const auto group_weight = [&](oct::Texel of) {
+    // How much of the four texels' weight lies on the surface of `of`: a texel of its group
+    // adds its weight times its coverage, a texel of a known other surface its weight times
+    // the rest of it (what of that texel its own surface does not cover is taken to be this
+    // one: at an edge there are two). Without coverage (1), the group's weight alone.
+    const auto score = [&](oct::Texel of) {
         float sum = 0.0f;
         for (std::size_t q = 0; q < 4; ++q) {
-            sum += together(of, texels[q]) ? weights[q] : 0.0f;
+            if (together(of, texels[q])) {
+                sum += weights[q] * coverages[q];
+            } else if (!std::isnan(map.distance_at(oct::texel_index(texels[q], n)))) {
+                sum += weights[q] * (1.0f - coverages[q]);
+            }
         }
         return sum;
     };
-    const float own = group_weight(met);
+    const float own = score(met);
     if (own >= 0.5f) {
         return met; // the common case: the met texel's surface holds the majority
     }
-    // The heaviest other group, by its heaviest texel (fixed order: ties keep the first).
+    // The best other group; among its texels the heaviest (fixed order: ties keep the first).
     oct::Texel best = met;
-    float best_group = own;
-    float best_texel = 0.0f;
+    float best_score = own;
+    float best_weight = 0.0f;
     for (std::size_t q = 0; q < 4; ++q) {
         const std::size_t k = oct::texel_index(texels[q], n);
         if (std::isnan(map.distance_at(k)) || together(met, texels[q])) {
             continue;
         }
-        const float group = group_weight(texels[q]);
-        if (group > best_group || (group == best_group && weights[q] > best_texel && best != met)) {
+        const float s = score(texels[q]);
+        if (s > best_score || (s == best_score && best != met && weights[q] > best_weight)) {
             best = texels[q];
-            best_group = group;
-            best_texel = weights[q];
+            best_score = s;
+            best_weight = weights[q];
         }
     }
     return best;

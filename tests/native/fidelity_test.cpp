@@ -170,6 +170,36 @@ TEST(Fidelity, BilinearBicubicAndBlendingNeverMixAForegroundAndABackgroundSurfac
     }
 }
 
+// The share of each texel's 4×4 stratum directions that see the texel's own surface (plate or
+// wall), as a mesh bake's coverage.
+void set_plate_coverage(ProbeMap& map) {
+    const int n = map.resolution;
+    const glm::dvec3 c = map.position;
+    const auto plate = [&](const glm::dvec3& d) {
+        const glm::dvec3 p = c + ((kPlateX - c.x) / d.x) * d;
+        return std::abs(p.y) < kPlateHalf && std::abs(p.z) < kPlateHalf;
+    };
+    map.coverage.assign(map.texel_count(), Imath::half(1.0f));
+    for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+            const std::size_t i = oct::texel_index({x, y}, n);
+            if (!std::isfinite(map.distance[i])) {
+                continue;
+            }
+            const bool own = plate(glm::dvec3(oct::texel_direction({x, y}, n)));
+            int same = 0;
+            for (int sy = 0; sy < 4; ++sy) {
+                for (int sx = 0; sx < 4; ++sx) {
+                    const glm::vec2 uv{(x + (sx + 0.5f) / 4.0f) / n, (y + (sy + 0.5f) / 4.0f) / n};
+                    const glm::dvec3 d(oct::decode(uv));
+                    same += d.x > 0.0 && plate(d) == own ? 1 : 0;
+                }
+            }
+            map.coverage[i] = Imath::half(static_cast<float>(same) / 16.0f);
+        }
+    }
+}
+
 TEST(Fidelity, ASilhouetteSeenFromTheProbeIsCutAtTheRaysDirectionNotAtTheTexels) {
     // From the probe's centre, 4×4 samples a pixel over the plate's corner: a coarse probe's
     // pixels against those of a probe 8 times as fine (its edges within an eighth of the coarse
@@ -177,9 +207,12 @@ TEST(Fidelity, ASilhouetteSeenFromTheProbeIsCutAtTheRaysDirectionNotAtTheTexels)
     // the surface with most of the bilinear weight around the ray follows the edge closer.
     const glm::dvec3 centre{0.0, 0.0, 0.0};
     const Camera camera = Camera::look_at(centre, {1.0, 0.27, 0.25}, 40, 40, 60.0);
-    const auto view = [&](int n, RadianceFilter filter) {
+    const auto view = [&](int n, RadianceFilter filter, bool with_coverage = false) {
         std::vector<ProbeMap> probes;
         probes.push_back(plate_probe(centre, n));
+        if (with_coverage) {
+            set_plate_coverage(probes.back());
+        }
         const ProbeField field(positions_placement({centre}), std::move(probes));
         return render_probe_view(field, camera, fidelity(16, filter, 1, FieldMode::Nearest));
     };
@@ -194,11 +227,18 @@ TEST(Fidelity, ASilhouetteSeenFromTheProbeIsCutAtTheRaysDirectionNotAtTheTexels)
     const double nearest = error(view(64, RadianceFilter::Nearest));
     const double bilinear = error(view(64, RadianceFilter::Bilinear));
     const double bicubic = error(view(64, RadianceFilter::Bicubic));
-    std::printf("plate edge, mean |red - fine red|: nearest %.5f, bilinear %.5f, bicubic %.5f\n",
-                nearest, bilinear, bicubic);
+    // With each texel's coverage (as a mesh bake measures it), the edge is placed inside the
+    // texel.
+    const double covered = error(view(64, RadianceFilter::Bilinear, true));
+    std::printf("plate edge, mean |red - fine red|: nearest %.5f, bilinear %.5f, bicubic %.5f, "
+                "bilinear with coverage %.5f\n",
+                nearest, bilinear, bicubic, covered);
     EXPECT_GT(nearest, 0.005);          // the edge crosses enough pixels to measure
     EXPECT_LT(bilinear, 0.9 * nearest); // measured 0.85×
     EXPECT_LT(bicubic, 0.9 * nearest);
+    EXPECT_LT(covered, 0.5 * nearest);
+    // Nearest stays the paper's texel, coverage or not.
+    EXPECT_EQ(view(64, RadianceFilter::Nearest).rgba, view(64, RadianceFilter::Nearest, true).rgba);
 }
 
 TEST(Fidelity, BlendingIsOrderIndependentAndBitIdenticalForOneAndTwoThreads) {

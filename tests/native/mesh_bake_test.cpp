@@ -151,5 +151,63 @@ TEST(MeshBake, SupersampledTexelsAcrossASilhouetteKeepTheirCentresSurfaceColour)
     EXPECT_GT(wall_beside_plate, 4);
 }
 
+TEST(MeshBake, ATexelAcrossASilhouetteKnowsHowMuchOfItIsItsSurface) {
+    // Coverage: the share of a texel's n×n rays on its centre ray's surface (for an empty
+    // texel, that meet nothing). Against the share of 16×16 directions across the texel on the
+    // same surface, it is within the 4×4 grid's resolution; a texel inside one surface covers
+    // all of itself.
+    const Mesh mesh = plate_before_wall();
+    const EmbreeScene scene(mesh);
+    const int n = 48;
+    const glm::dvec3 centre{0, 0.05, 0.02};
+    const ProbeMap map = bake_probe_from_mesh(scene, centre, MeshBakeSettings{n, 4});
+    ASSERT_EQ(map.coverage.size(), map.texel_count());
+    // 0 the plate, 1 the wall (10 m square), 2 nothing.
+    const auto surface = [&](const glm::dvec3& d) {
+        if (d.x <= 0.0) {
+            return 2;
+        }
+        const glm::dvec3 p = centre + ((1.0 - centre.x) / d.x) * d;
+        if (std::abs(p.y) < 0.3 && std::abs(p.z) < 0.3) {
+            return 0;
+        }
+        const glm::dvec3 w = centre + ((3.0 - centre.x) / d.x) * d;
+        return std::abs(w.y) < 5.0 && std::abs(w.z) < 5.0 ? 1 : 2;
+    };
+    int partial = 0;
+    double error = 0.0;
+    int texels = 0;
+    for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+            const std::size_t i = oct::texel_index({x, y}, n);
+            if (std::isnan(map.distance[i])) {
+                continue;
+            }
+            const int own = surface(glm::dvec3(oct::texel_direction({x, y}, n)));
+            int same = 0;
+            for (int sy = 0; sy < 16; ++sy) {
+                for (int sx = 0; sx < 16; ++sx) {
+                    const glm::vec2 uv{(x + (sx + 0.5f) / 16.0f) / n,
+                                       (y + (sy + 0.5f) / 16.0f) / n};
+                    same += surface(glm::dvec3(oct::decode(uv))) == own ? 1 : 0;
+                }
+            }
+            const double expected = same / 256.0;
+            const float coverage = map.coverage_at(i);
+            EXPECT_NEAR(coverage, expected, 0.2) << x << ", " << y;
+            if (same == 256) {
+                EXPECT_EQ(coverage, 1.0f);
+            }
+            partial += coverage < 1.0f ? 1 : 0;
+            error += std::abs(coverage - expected);
+            ++texels;
+        }
+    }
+    EXPECT_GT(partial, 20);
+    EXPECT_LT(error / texels, 0.01);
+    // One ray a texel knows nothing of its texel's edges: no coverage is written.
+    EXPECT_TRUE(bake_probe_from_mesh(scene, centre, MeshBakeSettings{n, 1}).coverage.empty());
+}
+
 } // namespace
 } // namespace lfprobe

@@ -65,9 +65,20 @@ TEST(ProbeSet, ProbeSurvivesWriteReadBitForBit) {
     EXPECT_EQ(back.state(1), TexelState::Empty);
     EXPECT_EQ(back.state(2), TexelState::Surface);
     EXPECT_EQ(back.state(4), TexelState::Inferred);
+    EXPECT_TRUE(back.coverage.empty()); // written without coverage: none read, 1 everywhere
+    EXPECT_EQ(back.coverage_at(7), 1.0f);
     for (const auto& entry : fs::directory_iterator(dir)) {
         EXPECT_EQ(entry.path().filename(), "p.exr"); // no temporary left behind
     }
+    // With coverage, that channel too, bit for bit.
+    map.coverage.assign(map.texel_count(), Imath::half(1.0f));
+    for (std::size_t i = 0; i < map.texel_count(); i += 3) {
+        map.coverage[i] = Imath::half(static_cast<float>(i % 16) / 16.0f);
+    }
+    write_probe_exr(path, map);
+    const ProbeMap covered = read_probe_exr(path);
+    EXPECT_TRUE(same_bits(covered.coverage, map.coverage));
+    EXPECT_TRUE(same_bits(covered.rgba, map.rgba));
 }
 
 // Issue 22, item 13: a probe EXR whose texels no bake writes (a negative or -inf distance, a
@@ -116,6 +127,13 @@ TEST(ProbeSet, ProbeTexelsNoBakeWritesAreRefusedNamingTheTexel) {
     refused(
         "confidence above 1", [](ProbeMap& m) { m.rgba[4 * texel + 3] = Imath::half(2.0f); },
         "confidence");
+    refused(
+        "coverage above 1",
+        [](ProbeMap& m) {
+            m.coverage.assign(m.texel_count(), Imath::half(1.0f));
+            m.coverage[texel] = Imath::half(1.5f);
+        },
+        "coverage");
     refused(
         "NaN radiance",
         [](ProbeMap& m) {

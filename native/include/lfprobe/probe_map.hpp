@@ -28,6 +28,11 @@ struct ProbeMap {
     std::vector<Imath::half> rgba;
     std::vector<float> distance;     // radial distance in metres; NaN unknown, +inf empty
     std::vector<Imath::half> normal; // world-space unit normal, 3 per texel; 0 where no surface
+    // Optional (empty: 1 for every texel): the fraction of a surface texel's solid angle that
+    // its stored surface covers, where a bake knows it (mesh bakes with n×n rays a texel). A
+    // texel on a silhouette holds one surface; its coverage says how much of the texel is that
+    // surface, so that a lookup can place the edge inside the texel (majority_surface_texel).
+    std::vector<Imath::half> coverage;
     // The compact channels (pack_probe); each replaces the full vector above it empties.
     PackedChannels packed;
 
@@ -54,6 +59,9 @@ struct ProbeMap {
         }
         return {static_cast<float>(rgba[4 * i]), static_cast<float>(rgba[4 * i + 1]),
                 static_cast<float>(rgba[4 * i + 2])};
+    }
+    [[nodiscard]] float coverage_at(std::size_t i) const {
+        return coverage.empty() ? 1.0f : static_cast<float>(coverage[i]);
     }
     [[nodiscard]] glm::vec3 normal_at(std::size_t i) const {
         if (!packed.normal.empty()) {

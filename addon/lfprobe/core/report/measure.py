@@ -75,16 +75,17 @@ class RunContext:
 
     # --- ground truth ------------------------------------------------------------------------
     def ground_truth(self, camera: dict, spp: Optional[int] = None, mesh=None,
-                     label: str = "gt") -> Tuple[dict, dict]:
-        """(image, stats) of the Embree ground truth of `camera` (cached for the scene mesh)."""
+                     label: str = "gt", filter_textures: bool = True) -> Tuple[dict, dict]:
+        """(image, stats) of the Embree ground truth of `camera` (cached for the scene mesh);
+        filter_textures=False point-samples the textures (no texture LOD)."""
         spp = self.preset.gt_spp if spp is None else spp
         text = json.dumps(camera, sort_keys=True)
-        key = f"{spp}:{text}"
+        key = f"{spp}:{filter_textures}:{text}"
         if mesh is None and key in self._ground_truth:
             return self._ground_truth[key]
         path = self.work_path("gt", f"{label}_{len(self._ground_truth):04d}.exr")
         job = self.native.start_ground_truth(self.mesh if mesh is None else mesh, text, path,
-                                             spp=spp, threads=self.threads)
+                                             spp=spp, threads=self.threads, filter_textures=filter_textures)
         stats = job.run()
         image = self.native.read_image(path)
         os.remove(path)

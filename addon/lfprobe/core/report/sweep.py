@@ -358,7 +358,8 @@ class Sweep:
                 bake_wall = time.perf_counter() - start
                 field = ctx.native.ProbeField.load(folder)
                 camera = ctx.camera(view, anchor)
-                gt_centre, _ = ctx.ground_truth(camera, spp=1)
+                # Unfiltered on both sides: the pixel centre, its texture point-sampled.
+                gt_centre, _ = ctx.ground_truth(camera, spp=1, filter_textures=False)
                 gt, _ = ctx.ground_truth(camera)
                 converged, _ = ctx.ground_truth(camera, spp=reference_spp)
                 w = camera["resolution"][0]
