@@ -95,6 +95,24 @@ bool on_surface_met(const ProbeMap& map, oct::Texel t, int n, const glm::dvec3& 
            glm::dot(glm::dvec3(map.normal_at(k)), normal_met) > 0.0;
 }
 
+// Where a direction falls among an n×n map's texel centres (at half-integers of uv · n): the
+// texel centre at or before it on each axis and how far past it, in texels.
+struct CellPosition {
+    int x0;
+    int y0;
+    float ax;
+    float ay;
+};
+
+CellPosition cell_position(const glm::dvec3& direction, int n) {
+    const glm::vec2 uv = oct::encode(glm::vec3(direction));
+    const float fx = uv.x * static_cast<float>(n) - 0.5f;
+    const float fy = uv.y * static_cast<float>(n) - 0.5f;
+    const float x0 = std::floor(fx);
+    const float y0 = std::floor(fy);
+    return {static_cast<int>(x0), static_cast<int>(y0), fx - x0, fy - y0};
+}
+
 // Catmull-Rom weights of the four samples around a point `a` ∈ [0, 1) past the second.
 std::array<float, 4> catmull_rom(float a) {
     const float a2 = a * a;
@@ -114,20 +132,16 @@ glm::vec3 same_surface_bicubic(const ProbeMap& map, const glm::dvec3& direction,
     }
     const glm::dvec3 normal_met(map.normal_at(met));
     const glm::dvec3 point_met = r_met * glm::dvec3(oct::texel_direction(texel, n));
-    const glm::vec2 uv = oct::encode(glm::vec3(direction));
-    const float fx = uv.x * static_cast<float>(n) - 0.5f;
-    const float fy = uv.y * static_cast<float>(n) - 0.5f;
-    const auto x0 = static_cast<int>(std::floor(fx));
-    const auto y0 = static_cast<int>(std::floor(fy));
-    const std::array<float, 4> wx = catmull_rom(fx - static_cast<float>(x0));
-    const std::array<float, 4> wy = catmull_rom(fy - static_cast<float>(y0));
+    const CellPosition cell = cell_position(direction, n);
+    const std::array<float, 4> wx = catmull_rom(cell.ax);
+    const std::array<float, 4> wy = catmull_rom(cell.ay);
     // Summed as differences from the texel met, so that one colour stays exactly that colour;
     // the weights sum to one, so no texel may be left out: any other surface (or none) among
     // the sixteen, and the bilinear's renormalised four read the point instead.
     glm::vec3 sum{0.0f};
     for (int j = 0; j < 4; ++j) {
         for (int i = 0; i < 4; ++i) {
-            const oct::Texel t = oct::wrap_texel(x0 - 1 + i, y0 - 1 + j, n);
+            const oct::Texel t = oct::wrap_texel(cell.x0 - 1 + i, cell.y0 - 1 + j, n);
             const std::size_t k = oct::texel_index(t, n);
             if (k == met) {
                 continue;
@@ -154,16 +168,10 @@ glm::vec3 same_surface_bilinear(const ProbeMap& map, const glm::dvec3& direction
     // The plane of the surface met: its stored point and normal.
     const glm::dvec3 normal_met(map.normal_at(met));
     const glm::dvec3 point_met = r_met * glm::dvec3(oct::texel_direction(texel, n));
-    const glm::vec2 uv = oct::encode(glm::vec3(direction));
-    // Texel centres sit at half-integers of uv * n: the four around uv and their weights.
-    const float fx = uv.x * static_cast<float>(n) - 0.5f;
-    const float fy = uv.y * static_cast<float>(n) - 0.5f;
-    const float x0 = std::floor(fx);
-    const float y0 = std::floor(fy);
-    const float ax = fx - x0;
-    const float ay = fy - y0;
-    const std::array<float, 2> wx{1.0f - ax, ax};
-    const std::array<float, 2> wy{1.0f - ay, ay};
+    // The four texels around the direction and their weights.
+    const CellPosition cell = cell_position(direction, n);
+    const std::array<float, 2> wx{1.0f - cell.ax, cell.ax};
+    const std::array<float, 2> wy{1.0f - cell.ay, cell.ay};
     // Summed as differences from the texel met, so that one colour stays exactly that colour.
     glm::vec3 sum{0.0f};
     float weight = 0.0f;
@@ -173,18 +181,11 @@ glm::vec3 same_surface_bilinear(const ProbeMap& map, const glm::dvec3& direction
             if (!(w > 0.0f)) {
                 continue;
             }
-            const oct::Texel t =
-                oct::wrap_texel(static_cast<int>(x0) + i, static_cast<int>(y0) + j, n);
+            const oct::Texel t = oct::wrap_texel(cell.x0 + i, cell.y0 + j, n);
             const std::size_t k = oct::texel_index(t, n);
             if (k != met) {
-                const double r = static_cast<double>(map.distance_at(k));
-                if (!std::isfinite(r)) {
-                    continue; // unknown or empty: no surface to read
-                }
-                const glm::dvec3 point = r * glm::dvec3(oct::texel_direction(t, n));
-                if (std::abs(glm::dot(normal_met, point - point_met)) > tolerance ||
-                    glm::dot(glm::dvec3(map.normal_at(k)), normal_met) <= 0.0) {
-                    continue; // another surface: across a silhouette or a fold
+                if (!on_surface_met(map, t, n, point_met, normal_met, tolerance)) {
+                    continue; // none, or another surface: across a silhouette or a fold
                 }
                 sum += w * (map.radiance_at(k) - base);
             }
@@ -205,21 +206,15 @@ oct::Texel majority_surface_texel(const ProbeMap& map, const glm::dvec3& directi
     if (n < 2) {
         return met;
     }
-    const glm::vec2 uv = oct::encode(glm::vec3(direction));
-    const float fx = uv.x * static_cast<float>(n) - 0.5f;
-    const float fy = uv.y * static_cast<float>(n) - 0.5f;
-    const float x0 = std::floor(fx);
-    const float y0 = std::floor(fy);
-    const float ax = fx - x0;
-    const float ay = fy - y0;
+    const CellPosition cell = cell_position(direction, n);
     std::array<oct::Texel, 4> texels{};
     std::array<float, 4> weights{};
     std::array<float, 4> coverages{};
     for (int j = 0; j < 2; ++j) {
         for (int i = 0; i < 2; ++i) {
             const auto q = static_cast<std::size_t>(2 * j + i);
-            texels[q] = oct::wrap_texel(static_cast<int>(x0) + i, static_cast<int>(y0) + j, n);
-            weights[q] = (i == 1 ? ax : 1.0f - ax) * (j == 1 ? ay : 1.0f - ay);
+            texels[q] = oct::wrap_texel(cell.x0 + i, cell.y0 + j, n);
+            weights[q] = (i == 1 ? cell.ax : 1.0f - cell.ax) * (j == 1 ? cell.ay : 1.0f - cell.ay);
             coverages[q] = map.coverage_at(oct::texel_index(texels[q], n));
         }
     }
