@@ -138,9 +138,9 @@ def _findings(data: Dict[str, object], reference: Optional[Dict[str, object]]) -
                 sentence += (
                     f" The pixels at silhouettes ({100 * top['silhouette_pixels']:.1f} % of the view) carry "
                     f"{100 * top['silhouette_error_share']:.0f} % of the probe's squared error against the converged "
-                    f"ground truth (a texel decides which surface a sample sees, so an edge steps at the texels' "
-                    f"pitch), and {100 * top['gt_silhouette_error_share']:.0f} % of the {top['spp']}-sample ground "
-                    f"truth's own.")
+                    f"ground truth (a texel holds one surface; its coverage places the edge inside it, to a fraction "
+                    f"of a texel), and {100 * top['gt_silhouette_error_share']:.0f} % of the {top['spp']}-sample "
+                    f"ground truth's own.")
             sentence += (
                 f" One sample per pixel on both sides gives "
                 f"{top['psnr_one_sample_per_pixel']:.2f} dB: aliasing, not the probe. One sample per pixel against "
