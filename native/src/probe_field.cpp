@@ -412,8 +412,54 @@ FieldTraceResult ProbeField::trace(const Ray& ray, const FieldTraceSettings& set
     FieldTraceResult result = resolve_mode(settings) == FieldMode::Grid
                                   ? trace_grid(ray, settings)
                                   : trace_nearest(ray, settings);
+    see_edge_as_the_centre_does(ray, result, settings);
     shade_hit(*this, ray, result, settings);
     return result;
+}
+
+void ProbeField::see_edge_as_the_centre_does(const Ray& ray, FieldTraceResult& hit,
+                                             const FieldTraceSettings& settings) const {
+    if (settings.filter == RadianceFilter::Nearest || hit.status != TraceStatus::Hit ||
+        hit.probe < 0) {
+        return;
+    }
+    const ProbeMap& map = probe(static_cast<std::size_t>(hit.probe));
+    const int n = map.resolution;
+    const glm::dvec3 offset = ray.origin - map.position;
+    // Parallax between the eye's and the probe's view of the hit, in texels.
+    if (glm::length(offset) > kEdgeParallaxTexels * oct::kTexelAngleTimesN / n * hit.t) {
+        return;
+    }
+    const glm::dvec3 from_centre = ray.at(hit.t) - map.position;
+    const double r = glm::length(from_centre);
+    const oct::Texel seen = majority_surface_texel(
+        map, from_centre, hit.texel, surface_thickness(settings.probe, r, map.resolution));
+    if (seen.x == hit.texel.x && seen.y == hit.texel.y) {
+        return;
+    }
+    // What the centre sees in that texel, moved onto the ray (the offset is a small fraction
+    // of the distance, so the first-order shift along the ray is exact enough).
+    const std::size_t i = oct::texel_index(seen, n);
+    const double r_seen = static_cast<double>(map.distance_at(i));
+    if (std::isnan(r_seen)) {
+        return;
+    }
+    if (std::isinf(r_seen)) {
+        hit.status = TraceStatus::Miss;
+        hit.t = std::numeric_limits<double>::infinity();
+        hit.free_until = ray.t_max;
+        hit.texel = {-1, -1};
+        return;
+    }
+    const double t = r_seen - glm::dot(offset, ray.direction);
+    if (!(t >= ray.t_min && t <= ray.t_max)) {
+        return;
+    }
+    hit.t = t;
+    hit.free_until = t;
+    hit.texel = seen;
+    hit.normal = map.normal_at(i);
+    hit.radiance = map.radiance_at(i);
 }
 
 FieldTraceResult ProbeField::trace_nearest(const Ray& ray,

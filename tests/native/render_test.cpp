@@ -298,6 +298,31 @@ TEST(Render, FromAProbeSetFolderAndACameraFileToAnExr) {
     std::filesystem::remove_all(folder);
 }
 
+TEST(Render, AnEyeApproachingAProbeConvergesToItsLookupEdgeRuleIncluded) {
+    // The edge rule reads a silhouette at the eye probe's centre at finer than a texel; a ray
+    // traced from an eye a micrometre away must see the same edges, or the image jumps as the
+    // eye reaches the probe (the report's "eye approaching a probe").
+    const ProbeField& field = baked_box_room();
+    const glm::dvec3 eye = field.probe(3).position + field.world_offset();
+    const glm::dvec3 ahead = glm::dvec3(-1.0, 0.4, -0.2);
+    const glm::dvec3 nudge = 1e-6 * glm::normalize(glm::dvec3(1.0, 0.7, 0.3));
+    RenderSettings settings;
+    settings.trace.blend = 1;
+    settings.trace.filter = RadianceFilter::Bilinear;
+    const RenderedImage at =
+        render_probe_view(field, Camera::look_at(eye, eye + ahead, 64, 48, 18.0), settings);
+    const RenderedImage near = render_probe_view(
+        field, Camera::look_at(eye + nudge, eye + nudge + ahead, 64, 48, 18.0), settings);
+    float worst = 0.0f;
+    for (std::size_t i = 0; i < at.pixel_count(); ++i) {
+        ASSERT_EQ(at.status[i], near.status[i]) << i;
+        for (int c = 0; c < 3; ++c) {
+            worst = std::max(worst, std::abs(at.rgba[4 * i + c] - near.rgba[4 * i + c]));
+        }
+    }
+    EXPECT_LT(worst, 1e-3f);
+}
+
 TEST(Render, EyeAtAProbeIsOneLookupPerRay) {
     // docs/DESIGN.md §4: with the eye at a probe every ray is a single texel lookup in that probe,
     // in grid mode as in nearest mode, and the answer is the lookup's: of the texel the ray

@@ -152,6 +152,14 @@ public:
                                              const TraceSettings& settings = {}) const;
 
 private:
+    // An eye this close to the probe that answered, in texels of parallax at the hit, sees
+    // the hit's edge as the probe's centre does: a ray from the centre takes the edge rule of
+    // the eye-at-probe lookup (majority_surface_texel), and a ray from within this parallax
+    // takes it too, so that a render converges to the lookup's as the eye reaches the probe.
+    static constexpr double kEdgeParallaxTexels = 1.0 / 16.0;
+    void see_edge_as_the_centre_does(const Ray& ray, FieldTraceResult& hit,
+                                     const FieldTraceSettings& settings) const;
+
     // One probe's maps, filled once: at load, or at first use for a lazily opened set.
     struct ProbeSlot {
         std::once_flag once;
