@@ -170,6 +170,13 @@ TEST(Fidelity, BilinearBicubicAndBlendingNeverMixAForegroundAndABackgroundSurfac
     }
 }
 
+// The map coordinate of the centre of stratum s (of `per_texel`) across texel `texel` of n.
+float stratum_coordinate(int texel, int s, int per_texel, int n) {
+    return (static_cast<float>(texel) +
+            (static_cast<float>(s) + 0.5f) / static_cast<float>(per_texel)) /
+           static_cast<float>(n);
+}
+
 // The share of each texel's 4×4 stratum directions that see the texel's own surface (plate or
 // wall), as a mesh bake's coverage.
 void set_plate_coverage(ProbeMap& map) {
@@ -190,7 +197,8 @@ void set_plate_coverage(ProbeMap& map) {
             int same = 0;
             for (int sy = 0; sy < 4; ++sy) {
                 for (int sx = 0; sx < 4; ++sx) {
-                    const glm::vec2 uv{(x + (sx + 0.5f) / 4.0f) / n, (y + (sy + 0.5f) / 4.0f) / n};
+                    const glm::vec2 uv{stratum_coordinate(x, sx, 4, n),
+                                       stratum_coordinate(y, sy, 4, n)};
                     const glm::dvec3 d(oct::decode(uv));
                     same += d.x > 0.0 && plate(d) == own ? 1 : 0;
                 }

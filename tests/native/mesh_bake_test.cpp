@@ -187,8 +187,11 @@ TEST(MeshBake, ATexelAcrossASilhouetteKnowsHowMuchOfItIsItsSurface) {
             int same = 0;
             for (int sy = 0; sy < 16; ++sy) {
                 for (int sx = 0; sx < 16; ++sx) {
-                    const glm::vec2 uv{(x + (sx + 0.5f) / 16.0f) / n,
-                                       (y + (sy + 0.5f) / 16.0f) / n};
+                    const glm::vec2 uv{
+                        (static_cast<float>(x) + (static_cast<float>(sx) + 0.5f) / 16.0f) /
+                            static_cast<float>(n),
+                        (static_cast<float>(y) + (static_cast<float>(sy) + 0.5f) / 16.0f) /
+                            static_cast<float>(n)};
                     same += surface(glm::dvec3(oct::decode(uv))) == own ? 1 : 0;
                 }
             }
