@@ -81,19 +81,34 @@ glm::vec3 filtered_radiance(const ProbeMap& map, const glm::dvec3& direction, oc
 
 namespace {
 
-// Whether texel `t`'s stored surface point lies on the plane (point_met, normal_met) within
-// `tolerance`, its normal on the same side: the same surface as the texel met.
-bool on_surface_met(const ProbeMap& map, oct::Texel t, int n, const glm::dvec3& point_met,
-                    const glm::dvec3& normal_met, double tolerance) {
-    const std::size_t k = oct::texel_index(t, n);
-    const double r = static_cast<double>(map.distance_at(k));
-    if (!std::isfinite(r)) {
-        return false; // unknown or empty: no surface to read
+// The texel met and the plane of its surface (stored point and normal), which the filters and
+// the edge rule test the texels around it against.
+struct SurfaceMet {
+    std::size_t index;
+    glm::vec3 radiance;
+    double distance; // NaN unknown, +inf empty: then no plane
+    glm::dvec3 normal;
+    glm::dvec3 point;
+
+    SurfaceMet(const ProbeMap& map, oct::Texel texel)
+        : index(oct::texel_index(texel, map.resolution)), radiance(map.radiance_at(index)),
+          distance(static_cast<double>(map.distance_at(index))), normal(map.normal_at(index)),
+          point(distance * glm::dvec3(oct::texel_direction(texel, map.resolution))) {}
+
+    // Whether texel `t`'s stored surface point lies on this plane within `tolerance`, its
+    // normal on the same side: the same surface.
+    [[nodiscard]] bool holds(const ProbeMap& map, oct::Texel t, double tolerance) const {
+        const int n = map.resolution;
+        const std::size_t k = oct::texel_index(t, n);
+        const double r = static_cast<double>(map.distance_at(k));
+        if (!std::isfinite(r)) {
+            return false; // unknown or empty: no surface to read
+        }
+        const glm::dvec3 p = r * glm::dvec3(oct::texel_direction(t, n));
+        return std::abs(glm::dot(normal, p - point)) <= tolerance &&
+               glm::dot(glm::dvec3(map.normal_at(k)), normal) > 0.0;
     }
-    const glm::dvec3 point = r * glm::dvec3(oct::texel_direction(t, n));
-    return std::abs(glm::dot(normal_met, point - point_met)) <= tolerance &&
-           glm::dot(glm::dvec3(map.normal_at(k)), normal_met) > 0.0;
-}
+};
 
 // Where a direction falls among an n×n map's texel centres (at half-integers of uv · n): the
 // texel centre at or before it on each axis and how far past it, in texels.
@@ -124,14 +139,10 @@ std::array<float, 4> catmull_rom(float a) {
 glm::vec3 same_surface_bicubic(const ProbeMap& map, const glm::dvec3& direction, oct::Texel texel,
                                double tolerance) {
     const int n = map.resolution;
-    const std::size_t met = oct::texel_index(texel, n);
-    const glm::vec3 base = map.radiance_at(met);
-    const double r_met = static_cast<double>(map.distance_at(met));
-    if (!std::isfinite(r_met) || n < 4) {
+    const SurfaceMet met(map, texel);
+    if (!std::isfinite(met.distance) || n < 4) {
         return same_surface_bilinear(map, direction, texel, tolerance);
     }
-    const glm::dvec3 normal_met(map.normal_at(met));
-    const glm::dvec3 point_met = r_met * glm::dvec3(oct::texel_direction(texel, n));
     const CellPosition cell = cell_position(direction, n);
     const std::array<float, 4> wx = catmull_rom(cell.ax);
     const std::array<float, 4> wy = catmull_rom(cell.ay);
@@ -143,31 +154,26 @@ glm::vec3 same_surface_bicubic(const ProbeMap& map, const glm::dvec3& direction,
         for (int i = 0; i < 4; ++i) {
             const oct::Texel t = oct::wrap_texel(cell.x0 - 1 + i, cell.y0 - 1 + j, n);
             const std::size_t k = oct::texel_index(t, n);
-            if (k == met) {
+            if (k == met.index) {
                 continue;
             }
-            if (!on_surface_met(map, t, n, point_met, normal_met, tolerance)) {
+            if (!met.holds(map, t, tolerance)) {
                 return same_surface_bilinear(map, direction, texel, tolerance);
             }
             sum += (wx[static_cast<std::size_t>(i)] * wy[static_cast<std::size_t>(j)]) *
-                   (map.radiance_at(k) - base);
+                   (map.radiance_at(k) - met.radiance);
         }
     }
-    return base + sum;
+    return met.radiance + sum;
 }
 
 glm::vec3 same_surface_bilinear(const ProbeMap& map, const glm::dvec3& direction, oct::Texel texel,
                                 double tolerance) {
     const int n = map.resolution;
-    const std::size_t met = oct::texel_index(texel, n);
-    const glm::vec3 base = map.radiance_at(met);
-    const double r_met = static_cast<double>(map.distance_at(met));
-    if (!std::isfinite(r_met)) {
-        return base;
+    const SurfaceMet met(map, texel);
+    if (!std::isfinite(met.distance)) {
+        return met.radiance;
     }
-    // The plane of the surface met: its stored point and normal.
-    const glm::dvec3 normal_met(map.normal_at(met));
-    const glm::dvec3 point_met = r_met * glm::dvec3(oct::texel_direction(texel, n));
     // The four texels around the direction and their weights.
     const CellPosition cell = cell_position(direction, n);
     const std::array<float, 2> wx{1.0f - cell.ax, cell.ax};
@@ -183,19 +189,19 @@ glm::vec3 same_surface_bilinear(const ProbeMap& map, const glm::dvec3& direction
             }
             const oct::Texel t = oct::wrap_texel(cell.x0 + i, cell.y0 + j, n);
             const std::size_t k = oct::texel_index(t, n);
-            if (k != met) {
-                if (!on_surface_met(map, t, n, point_met, normal_met, tolerance)) {
+            if (k != met.index) {
+                if (!met.holds(map, t, tolerance)) {
                     continue; // none, or another surface: across a silhouette or a fold
                 }
-                sum += w * (map.radiance_at(k) - base);
+                sum += w * (map.radiance_at(k) - met.radiance);
             }
             weight += w;
         }
     }
     if (!(weight > 0.0f)) {
-        return base;
+        return met.radiance;
     }
-    return base + sum / weight;
+    return met.radiance + sum / weight;
 }
 
 } // namespace
@@ -219,25 +225,18 @@ oct::Texel majority_surface_texel(const ProbeMap& map, const glm::dvec3& directi
         }
     }
     // Same surface, or both empty; an unknown texel is of no group.
-    const auto together = [&](oct::Texel a, oct::Texel b) {
-        const std::size_t ia = oct::texel_index(a, n);
-        const double ra = static_cast<double>(map.distance_at(ia));
+    const auto together = [&](const SurfaceMet& of, oct::Texel b) {
         const double rb = static_cast<double>(map.distance_at(oct::texel_index(b, n)));
-        if (std::isinf(ra) || std::isinf(rb)) {
-            return std::isinf(ra) && std::isinf(rb);
+        if (std::isinf(of.distance) || std::isinf(rb)) {
+            return std::isinf(of.distance) && std::isinf(rb);
         }
-        if (std::isnan(ra) || std::isnan(rb)) {
-            return false;
-        }
-        const glm::dvec3 normal(map.normal_at(ia));
-        return on_surface_met(map, b, n, ra * glm::dvec3(oct::texel_direction(a, n)), normal,
-                              tolerance);
+        return !std::isnan(of.distance) && of.holds(map, b, tolerance);
     };
     // How much of the four texels' weight lies on the surface of `of`: a texel of its group
     // adds its weight times its coverage, a texel of a known other surface its weight times
     // the rest of it (what of that texel its own surface does not cover is taken to be this
     // one: at an edge there are two). Without coverage (1), the group's weight alone.
-    const auto score = [&](oct::Texel of) {
+    const auto score = [&](const SurfaceMet& of) {
         float sum = 0.0f;
         for (std::size_t q = 0; q < 4; ++q) {
             if (together(of, texels[q])) {
@@ -248,7 +247,19 @@ oct::Texel majority_surface_texel(const ProbeMap& map, const glm::dvec3& directi
         }
         return sum;
     };
-    const float own = score(met);
+    // The met texel's own share is a lower bound of its group's score: near its centre that
+    // alone decides, without a neighbour's surface test.
+    float own_share = 0.0f;
+    for (std::size_t q = 0; q < 4; ++q) {
+        if (texels[q].x == met.x && texels[q].y == met.y) {
+            own_share += weights[q] * coverages[q];
+        }
+    }
+    if (own_share >= 0.5f) {
+        return met;
+    }
+    const SurfaceMet met_surface(map, met);
+    const float own = score(met_surface);
     if (own >= 0.5f) {
         return met; // the common case: the met texel's surface holds the majority
     }
@@ -258,10 +269,10 @@ oct::Texel majority_surface_texel(const ProbeMap& map, const glm::dvec3& directi
     float best_weight = 0.0f;
     for (std::size_t q = 0; q < 4; ++q) {
         const std::size_t k = oct::texel_index(texels[q], n);
-        if (std::isnan(map.distance_at(k)) || together(met, texels[q])) {
+        if (std::isnan(map.distance_at(k)) || together(met_surface, texels[q])) {
             continue;
         }
-        const float s = score(texels[q]);
+        const float s = score(SurfaceMet(map, texels[q]));
         if (s > best_score || (s == best_score && best != met && weights[q] > best_weight)) {
             best = texels[q];
             best_score = s;
