@@ -151,11 +151,17 @@ PointCloud merge_scans(std::vector<ScanFile> files, const MergeOptions& options)
         any_normal = any_normal || !file.normals.empty();
         any_intensity = any_intensity || !file.intensities.empty();
     }
-    cloud.positions.resize(total);
+    // One file: its positions are moved to the cloud and shifted to the world offset in place
+    // (a new array of a 10 M-point scan costs its page faults as much as the shift).
+    const bool single = files.size() == 1;
+    if (single) {
+        cloud.positions = std::move(files[0].positions);
+    } else {
+        cloud.positions.resize(total);
+    }
     cloud.scan_index.resize(total);
     // One file: its colours, normals and intensities are the cloud's as they are (moved, not
     // copied: a copy of a 10 M-point scan's colours costs as much as parsing a fifth of it).
-    const bool single = files.size() == 1;
     if (single) {
         cloud.colors = std::move(files[0].colors);
         cloud.normals = std::move(files[0].normals);
@@ -171,13 +177,14 @@ PointCloud merge_scans(std::vector<ScanFile> files, const MergeOptions& options)
     std::size_t first = 0;
     for (std::size_t f = 0; f < files.size(); ++f) {
         ScanFile& file = files[f];
-        const std::size_t count = file.positions.size();
+        const std::size_t count = single ? cloud.positions.size() : file.positions.size();
         const auto index = static_cast<std::uint32_t>(f);
         tbb::parallel_for(
             tbb::blocked_range<std::size_t>(0, count, 1 << 16),
             [&](const tbb::blocked_range<std::size_t>& block) {
+                const std::vector<glm::vec3>& from = single ? cloud.positions : file.positions;
                 for (std::size_t i = block.begin(); i != block.end(); ++i) {
-                    const glm::dvec3 p(file.positions[i]);
+                    const glm::dvec3 p(from[i]);
                     cloud.positions[first + i] =
                         glm::vec3(static_cast<float>(file.origin.x + p.x - cloud.world_offset.x),
                                   static_cast<float>(file.origin.y + p.y - cloud.world_offset.y),

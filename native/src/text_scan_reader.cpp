@@ -40,6 +40,7 @@ struct ChunkPoints {
     std::vector<glm::vec3> normals;
     std::vector<float> intensities;
     double max_colour = 0.0;
+    bool colours_decoded = false; // linear already (decode_srgb_in_place)
     std::uint64_t declared_points = 0;
     ParseFailure failure;
 };
@@ -559,7 +560,14 @@ void concatenate(std::vector<ChunkPoints>& chunks, std::vector<T> ChunkPoints::*
         if (progress != nullptr) {
             progress->throw_if_cancelled();
         }
-        parse_chunk(file.data(), ranges[i], prefix, dialect, chunks[i]);
+        ChunkPoints& chunk = chunks[i];
+        parse_chunk(file.data(), ranges[i], prefix, dialect, chunk);
+        // A value above 1 makes the whole file's colours 0-255 integers: decoded now, while
+        // they are in cache; the rest once the file's largest value is known.
+        if (chunk.max_colour > 1.0 && !chunk.failure.failed) {
+            decode_srgb_in_place(chunk.colours.data(), chunk.colours.size(), chunk.max_colour);
+            chunk.colours_decoded = true;
+        }
         if (progress != nullptr) {
             progress->advance(ranges[i].end - ranges[i].begin);
         }
@@ -598,12 +606,13 @@ void concatenate(std::vector<ChunkPoints>& chunks, std::vector<T> ChunkPoints::*
     scan.has_scanner = prefix.has_scanner;
     concatenate(chunks, &ChunkPoints::positions, offsets, scan.positions);
     if (prefix.layout.has_colour) {
+        tbb::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t i) {
+            ChunkPoints& chunk = chunks[i];
+            if (!chunk.colours_decoded) {
+                decode_srgb_in_place(chunk.colours.data(), chunk.colours.size(), max_colour);
+            }
+        });
         concatenate(chunks, &ChunkPoints::colours, offsets, scan.colors);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, scan.colors.size(), 1 << 16),
-                          [&](const tbb::blocked_range<std::size_t>& block) {
-                              decode_srgb_in_place(scan.colors.data() + block.begin(), block.size(),
-                                                   max_colour);
-                          });
     }
     if (prefix.layout.has_normal) {
         concatenate(chunks, &ChunkPoints::normals, offsets, scan.normals);

@@ -307,6 +307,33 @@ TEST(XyzReader, ManyChunksKeepOrderAndReportTheEarliestError) {
     expect_input_error("big_short.xyz", bad, {"big_short.xyz:90000:", "expected 6 columns"});
 }
 
+// Chunks decode their colours as soon as one of their values says 0-255; a chunk whose values
+// are all 0 or 1 waits for the file's largest value, which here says 0-255 too.
+TEST(XyzReader, ColoursOfEveryChunkFollowTheWholeFilesRange) {
+    std::string text;
+    const int count = 150000; // about 4 MB: several parallel chunks
+    for (int i = 0; i < count; ++i) {
+        const int red = i < count / 2 ? i % 2 : 200;
+        text += std::to_string(i) + ".5 1.25 2 " + std::to_string(red) + " 0 1\n";
+    }
+    const ScanFile scan = read("ranges.xyz", text);
+    ASSERT_EQ(scan.colors.size(), static_cast<std::size_t>(count));
+    for (int i = 0; i < count; i += 499) {
+        const int red = i < count / 2 ? i % 2 : 200;
+        expect_colour(scan.colors[static_cast<std::size_t>(i)], {srgb8(red), srgb8(0), srgb8(1)});
+    }
+    // All values 0 or 1: colours are 0-1 floats, in every chunk.
+    std::string unit;
+    for (int i = 0; i < count; ++i) {
+        unit += std::to_string(i) + ".5 1.25 2 " + std::to_string(i % 2) + " 0 1\n";
+    }
+    const ScanFile floats = read("unit.xyz", unit);
+    for (int i = 0; i < count; i += 499) {
+        expect_colour(floats.colors[static_cast<std::size_t>(i)],
+                      {static_cast<float>(i % 2), 0.0f, 1.0f});
+    }
+}
+
 TEST(XyzErrors, EmptyFileOrNoData) {
     expect_input_error("empty.xyz", "", {"empty.xyz:1:", "no data lines", "expected"});
     expect_input_error("comments_only.xyz", "# a\n\n// b\n",

@@ -17,12 +17,15 @@ from .scan_formats import MissingLibraryError, library
 
 
 def best_of(fn, repeats: int = 3) -> float:
-    """The fastest of `repeats` runs of fn(), in seconds."""
+    """The fastest of `repeats` runs of fn(), in seconds. What fn returns is freed after the
+    clock stops: tearing down the last result (a 2 M-point cloud's 56 MB: 16 ms) is not part
+    of reading the file, for either side of a comparison."""
     best = float("inf")
     for _ in range(repeats):
         start = time.perf_counter()
-        fn()
+        result = fn()
         best = min(best, time.perf_counter() - start)
+        del result
     return best
 
 
