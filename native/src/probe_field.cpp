@@ -419,8 +419,14 @@ FieldTraceResult ProbeField::trace(const Ray& ray, const FieldTraceSettings& set
 
 void ProbeField::see_edge_as_the_centre_does(const Ray& ray, FieldTraceResult& hit,
                                              const FieldTraceSettings& settings) const {
-    if (settings.filter == RadianceFilter::Nearest || hit.status != TraceStatus::Hit ||
-        hit.probe < 0) {
+    if (settings.filter == RadianceFilter::Nearest || hit.probe < 0) {
+        return;
+    }
+    if (hit.status == TraceStatus::Miss) {
+        see_edge_of_a_miss_as_the_centre_does(ray, hit);
+        return;
+    }
+    if (hit.status != TraceStatus::Hit) {
         return;
     }
     const ProbeMap& map = probe(static_cast<std::size_t>(hit.probe));
@@ -455,6 +461,43 @@ void ProbeField::see_edge_as_the_centre_does(const Ray& ray, FieldTraceResult& h
     if (!(t >= ray.t_min && t <= ray.t_max)) {
         return;
     }
+    hit.t = t;
+    hit.free_until = t;
+    hit.texel = seen;
+    hit.normal = map.normal_at(i);
+    hit.radiance = map.radiance_at(i);
+}
+
+// A MISS through the empty texel of the ray's direction, from an eye near the probe that
+// answered: the centre's lookup judges the edge between that texel and a surface beside it
+// (a thin slat against open space) by the bilinear weight's majority, and may see the
+// surface. The eye sees it too where its parallax at the surface is as small as for a HIT.
+void ProbeField::see_edge_of_a_miss_as_the_centre_does(const Ray& ray,
+                                                       FieldTraceResult& hit) const {
+    const ProbeMap& map = probe(static_cast<std::size_t>(hit.probe));
+    const int n = map.resolution;
+    const oct::Texel met = oct::texel_of_direction(glm::vec3(glm::normalize(ray.direction)), n);
+    if (!std::isinf(map.distance_at(oct::texel_index(met, n)))) {
+        return; // the probe proved the ray free in front of a surface, not through open space
+    }
+    const oct::Texel seen = majority_surface_texel(map, ray.direction, met, 0.0);
+    if (seen.x == met.x && seen.y == met.y) {
+        return;
+    }
+    const std::size_t i = oct::texel_index(seen, n);
+    const double r_seen = static_cast<double>(map.distance_at(i));
+    if (!std::isfinite(r_seen)) {
+        return;
+    }
+    const glm::dvec3 offset = ray.origin - map.position;
+    if (glm::length(offset) > kEdgeParallaxTexels * oct::kTexelAngleTimesN / n * r_seen) {
+        return;
+    }
+    const double t = r_seen - glm::dot(offset, ray.direction);
+    if (!(t >= ray.t_min && t <= ray.t_max)) {
+        return;
+    }
+    hit.status = TraceStatus::Hit;
     hit.t = t;
     hit.free_until = t;
     hit.texel = seen;

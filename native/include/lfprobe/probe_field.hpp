@@ -159,6 +159,7 @@ private:
     static constexpr double kEdgeParallaxTexels = 1.0 / 16.0;
     void see_edge_as_the_centre_does(const Ray& ray, FieldTraceResult& hit,
                                      const FieldTraceSettings& settings) const;
+    void see_edge_of_a_miss_as_the_centre_does(const Ray& ray, FieldTraceResult& hit) const;
 
     // One probe's maps, filled once: at load, or at first use for a lazily opened set.
     struct ProbeSlot {
