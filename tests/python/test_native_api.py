@@ -203,7 +203,7 @@ def test_grid_positions_are_the_bakes_with_a_one_probe_axis_at_the_centre(native
     assert positions[:, 2].tolist() == [1.0, 1.0, 1.0, 3.0, 3.0, 3.0]
     assert grid_positions([0.0, 0.0, 1.0], [2.0, 4.0, 3.0], [3, 1, 2]) == positions.tolist()
     # The defaults every caller reads are the native settings' own.
-    assert defaults.trace("thickness") == 0.01 and defaults.bake("splat_scale") == 0.8
+    assert defaults.trace("thickness") == 0.0025 and defaults.bake("splat_scale") == 0.8
     assert defaults.trace("fallback_thickness") == 0.02
     assert defaults.bake("resolution") == 512 and defaults.trace("blend") == 4
 

@@ -22,9 +22,9 @@ TRACE_VARIANTS = [
     # Coarse resolution: the coarsest min-distance level kept (ProbeField.load(coarse_resolution)).
     ("coarse levels down to 32²", {**DEFAULT_TRACE[1], "coarse_resolution": 32}),
     ("nearest-first (no grid walk)", {**DEFAULT_TRACE[1], "mode": "nearest"}),
-    ("no fallback (1 cm alone, the default before)", {**DEFAULT_TRACE[1], "fallback_thickness": 0.0}),
+    ("no fallback (the thickness alone)", {**DEFAULT_TRACE[1], "fallback_thickness": 0.0}),
+    ("thickness 1 cm (the default before)", {**DEFAULT_TRACE[1], "thickness": 0.01}),
     ("thickness 2 cm (before that)", {**DEFAULT_TRACE[1], "thickness": 0.02}),
-    ("thickness 5 cm", {**DEFAULT_TRACE[1], "thickness": 0.05}),
     # The paper's colour: the first probe that answers, its one texel (no filter, no blending).
     ("first hit, nearest texel (the paper)", {**DEFAULT_TRACE[1], "filter": "nearest", "blend": 1}),
 ]
