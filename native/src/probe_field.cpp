@@ -417,6 +417,29 @@ FieldTraceResult ProbeField::trace(const Ray& ray, const FieldTraceSettings& set
     return result;
 }
 
+namespace {
+
+// A HIT on what the probe's centre sees in texel `seen` (a surface at r_seen), moved onto the
+// ray: the eye's offset from the centre is a small fraction of the distance, so the
+// first-order shift along the ray is exact enough. Nothing changes where that falls outside
+// the ray's interval.
+void see_texel_as_the_centre_does(const ProbeMap& map, const Ray& ray, oct::Texel seen,
+                                  double r_seen, FieldTraceResult& hit) {
+    const double t = r_seen - glm::dot(ray.origin - map.position, ray.direction);
+    if (!(t >= ray.t_min && t <= ray.t_max)) {
+        return;
+    }
+    const std::size_t i = oct::texel_index(seen, map.resolution);
+    hit.status = TraceStatus::Hit;
+    hit.t = t;
+    hit.free_until = t;
+    hit.texel = seen;
+    hit.normal = map.normal_at(i);
+    hit.radiance = map.radiance_at(i);
+}
+
+} // namespace
+
 void ProbeField::see_edge_as_the_centre_does(const Ray& ray, FieldTraceResult& hit,
                                              const FieldTraceSettings& settings) const {
     if (settings.filter == RadianceFilter::Nearest || hit.probe < 0) {
@@ -443,10 +466,7 @@ void ProbeField::see_edge_as_the_centre_does(const Ray& ray, FieldTraceResult& h
     if (seen.x == hit.texel.x && seen.y == hit.texel.y) {
         return;
     }
-    // What the centre sees in that texel, moved onto the ray (the offset is a small fraction
-    // of the distance, so the first-order shift along the ray is exact enough).
-    const std::size_t i = oct::texel_index(seen, n);
-    const double r_seen = static_cast<double>(map.distance_at(i));
+    const double r_seen = static_cast<double>(map.distance_at(oct::texel_index(seen, n)));
     if (std::isnan(r_seen)) {
         return;
     }
@@ -457,15 +477,7 @@ void ProbeField::see_edge_as_the_centre_does(const Ray& ray, FieldTraceResult& h
         hit.texel = {-1, -1};
         return;
     }
-    const double t = r_seen - glm::dot(offset, ray.direction);
-    if (!(t >= ray.t_min && t <= ray.t_max)) {
-        return;
-    }
-    hit.t = t;
-    hit.free_until = t;
-    hit.texel = seen;
-    hit.normal = map.normal_at(i);
-    hit.radiance = map.radiance_at(i);
+    see_texel_as_the_centre_does(map, ray, seen, r_seen, hit);
 }
 
 // A MISS through the empty texel of the ray's direction, from an eye near the probe that
@@ -484,8 +496,7 @@ void ProbeField::see_edge_of_a_miss_as_the_centre_does(const Ray& ray,
     if (seen.x == met.x && seen.y == met.y) {
         return;
     }
-    const std::size_t i = oct::texel_index(seen, n);
-    const double r_seen = static_cast<double>(map.distance_at(i));
+    const double r_seen = static_cast<double>(map.distance_at(oct::texel_index(seen, n)));
     if (!std::isfinite(r_seen)) {
         return;
     }
@@ -493,16 +504,7 @@ void ProbeField::see_edge_of_a_miss_as_the_centre_does(const Ray& ray,
     if (glm::length(offset) > kEdgeParallaxTexels * oct::kTexelAngleTimesN / n * r_seen) {
         return;
     }
-    const double t = r_seen - glm::dot(offset, ray.direction);
-    if (!(t >= ray.t_min && t <= ray.t_max)) {
-        return;
-    }
-    hit.status = TraceStatus::Hit;
-    hit.t = t;
-    hit.free_until = t;
-    hit.texel = seen;
-    hit.normal = map.normal_at(i);
-    hit.radiance = map.radiance_at(i);
+    see_texel_as_the_centre_does(map, ray, seen, r_seen, hit);
 }
 
 FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
