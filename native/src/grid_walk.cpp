@@ -61,24 +61,9 @@ GridWalk::GridWalk(const ProbeGrid& grid, const Ray& ray) : grid_(grid), ray_(ra
         if (!bounded_[ua]) {
             continue;
         }
-        const double lo = grid.origin[a];
-        const double hi =
-            grid.origin[a] + grid.spacing[a] * static_cast<double>(grid.counts[ua] - 1);
-        const double o = ray.origin[a];
-        const double d = ray.direction[a];
-        if (d == 0.0) {
-            if (o < lo || o > hi) {
-                t_enter = kInf; // parallel to the slab and outside it
-            }
-            continue;
-        }
-        double t0 = (lo - o) / d;
-        double t1 = (hi - o) / d;
-        if (t0 > t1) {
-            std::swap(t0, t1);
-        }
-        t_enter = std::max(t_enter, t0);
-        t_exit = std::min(t_exit, t1);
+        clip_to_slab(ray, a, grid.origin[a],
+                     grid.origin[a] + grid.spacing[a] * static_cast<double>(grid.counts[ua] - 1),
+                     t_enter, t_exit);
     }
     meets_ = t_enter <= t_exit;
     done_ = !meets_;
