@@ -18,6 +18,7 @@
 #include "job.hpp"
 #include "lfprobe/cloud_bake.hpp"
 #include "lfprobe/error.hpp"
+#include "lfprobe/known_space.hpp"
 #include "lfprobe/mesh_bake.hpp"
 #include "lfprobe/min_distance_pyramid.hpp"
 #include "lfprobe/octahedral.hpp"
@@ -530,6 +531,15 @@ PYBIND11_MODULE(_native, m) {
     lfprobe::python::bind_plan(m);
     lfprobe::python::bind_staged_bake(m);
 
+    m.def(
+        "append_known_space",
+        [](const std::string& set_folder, const std::string& probe_folder, std::size_t index) {
+            return append_known_space(set_folder, probe_folder, index);
+        },
+        py::arg("set_folder"), py::arg("probe_folder"), py::arg("index"),
+        "Adds the known space of the one-probe set in probe_folder to the set in set_folder as "
+        "its probe `index` (a set grown a probe at a time). False, with the set's known space "
+        "removed, where either has none: drop the manifest's \"known_space\" then.");
     m.def(
         "set_probe_set_storage",
         [](const std::string& folder, const py::object& storage, double distance_step) {

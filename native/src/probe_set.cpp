@@ -81,6 +81,9 @@ json ProbeSetManifest::to_json() const {
     j["bake"] = bake;
     j["sources"] = sources.is_null() ? json::array() : sources;
     j["storage"] = storage.to_json();
+    if (!known_space_file.empty()) {
+        j["known_space"] = known_space_file;
+    }
     j["channels"] = json{{"R,G,B", "linear radiance, half"},
                          {"A", "confidence: 1 measured, (0,1) inferred, 0 unknown or empty"},
                          {"Z", "radial distance in metres, float32; NaN unknown, +inf empty"},
@@ -189,6 +192,18 @@ ProbeSetManifest ProbeSetManifest::from_json(const json& j, const std::string& w
     m.sources = j.value("sources", json::array());
     if (j.contains("storage")) {
         m.storage = ProbeStorage::from_json(j["storage"], where);
+    }
+    if (j.contains("known_space")) {
+        if (!j["known_space"].is_string()) {
+            throw InputError(where + ": 'known_space' must be a file name, got " +
+                             j["known_space"].dump());
+        }
+        m.known_space_file = j["known_space"].get<std::string>();
+        if (m.known_space_file.empty() || m.known_space_file.find('/') != std::string::npos ||
+            m.known_space_file.find("..") != std::string::npos) {
+            throw InputError(where + ": known-space file '" + m.known_space_file +
+                             "' must be a plain file name");
+        }
     }
     return m;
 }

@@ -4,7 +4,10 @@
 #include <system_error>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/known_space.hpp"
 #include "lfprobe/probe_exr.hpp"
+
+#include <tbb/parallel_for.h>
 
 namespace lfprobe {
 
@@ -25,9 +28,16 @@ fs::path sibling(const fs::path& folder, const std::string& suffix) {
     return folder.parent_path() / (folder.filename().string() + suffix);
 }
 
-// A probe set's own files: its manifest, its probes and their temporaries.
+// A probe set's own files: its manifest, its probes, their known space and their temporaries.
 bool is_probe_set_file(const std::string& name) {
-    return name.rfind("probe_", 0) == 0 || name.rfind(kManifestName, 0) == 0;
+    return name.rfind("probe_", 0) == 0 || name.rfind(kManifestName, 0) == 0 ||
+           name.rfind(kKnownSpaceName, 0) == 0;
+}
+
+// Where probe `index` leaves its own known space in the staging folder, for the finish to merge
+// into the set's.
+std::string staged_known_space_name(std::size_t index) {
+    return probe_file_name(index) + ".known";
 }
 
 // A bake replaces `folder` as a whole, so it must hold nothing but an earlier set's files.
@@ -82,7 +92,7 @@ void remove_strays(const fs::path& staging, const ProbeSetManifest& manifest) {
     std::vector<fs::path> strays;
     for (const auto& entry : fs::directory_iterator(staging, ec)) {
         const std::string name = entry.path().filename().string();
-        bool listed = false;
+        bool listed = !manifest.known_space_file.empty() && name == manifest.known_space_file;
         for (const ProbeRecord& record : manifest.probes) {
             listed = listed || record.file == name;
         }
@@ -128,6 +138,9 @@ StagedProbe write_staged_probe(const std::string& staging, std::size_t index, co
     const std::string file = probe_file_name(index);
     const std::string path = (fs::path(staging) / file).string();
     write_probe_exr(path, map);
+    KnownSpace known;
+    known.add_probe(map, index);
+    known.write((fs::path(staging) / staged_known_space_name(index)).string());
     StagedProbe staged;
     staged.index = index;
     // The map's own position: a planned probe may have been moved off its grid point.
@@ -137,7 +150,8 @@ StagedProbe write_staged_probe(const std::string& staging, std::size_t index, co
     return staged;
 }
 
-void finish_probe_set_staging(const std::string& folder, const ProbeSetManifest& manifest) {
+void finish_probe_set_staging(const std::string& folder, const ProbeSetManifest& listed) {
+    ProbeSetManifest manifest = listed;
     const fs::path target = set_folder_path(folder);
     const fs::path staging = probe_set_staging_path(folder);
     const std::size_t count = manifest.placement.positions.size();
@@ -154,6 +168,29 @@ void finish_probe_set_staging(const std::string& folder, const ProbeSetManifest&
         }
     }
     check_replaceable(target);
+    // The probes' known spaces, merged into the set's; a set some of whose probes were staged
+    // without one (by an older writer) gets none, and traces ask every probe as before.
+    manifest.known_space_file.clear();
+    bool every_probe = true;
+    for (std::size_t i = 0; i < count && every_probe; ++i) {
+        every_probe = fs::is_regular_file(staging / staged_known_space_name(i), ec);
+    }
+    if (every_probe) {
+        std::vector<KnownSpace> parts(count);
+        tbb::parallel_for(std::size_t{0}, count, [&](std::size_t i) {
+            parts[i] = KnownSpace::read((staging / staged_known_space_name(i)).string());
+        });
+        for (std::size_t width = 1; width < count; width *= 2) {
+            tbb::parallel_for(std::size_t{0}, count, 2 * width, [&](std::size_t i) {
+                if (i + width < count) {
+                    parts[i].merge(parts[i + width]);
+                    parts[i + width] = KnownSpace();
+                }
+            });
+        }
+        parts.front().write((staging / kKnownSpaceName).string());
+        manifest.known_space_file = kKnownSpaceName;
+    }
     remove_strays(staging, manifest);
     write_manifest(staging.string(), manifest);
     swap_in(staging, target);

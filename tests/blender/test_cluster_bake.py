@@ -78,7 +78,7 @@ def test_bake_on_the_preferences_scheduler_equals_the_local_bake():
     folder = helpers.addon("blender.grid").probe_dir_abspath(grid_obj)
     assert bpy.ops.object.lfprobe_bake() == {"FINISHED"}
     local = _files(folder)
-    assert len(local) == 3  # two probes and the manifest
+    assert len(local) == 4  # two probes, their known space and the manifest
 
     cluster = _Cluster()
     try:

@@ -77,6 +77,14 @@ def test_greedy_placement_fills_the_hidden_view(room, native):
     assert field.probe_count == 2 and field.memory_bytes == last["memory_bytes"]
     image, _ = field.render(json.dumps(room["cameras"][0]), threads=2)
     assert (image["status"] == 1).mean() > 0.95
+    # Its known space grew with it: both probes' (an incomplete one would be refused).
+    assert manifest["known_space"] == "known_space.bin"
+    for camera in room["cameras"]:
+        lazy = native.ProbeField.load(out, lazy=True)
+        text = json.dumps(camera)
+        stopped, _ = lazy.render(text, threads=2)
+        asked_on, _ = lazy.render(text, threads=2, stop_where_no_probe_can_answer=False)
+        assert all((stopped[k] == asked_on[k]).all() for k in ("rgba", "status", "probe"))
 
 
 def test_budget_stops_before_the_probe_that_does_not_fit(room):

@@ -175,7 +175,7 @@ def test_killed_rebake_leaves_the_earlier_set_as_it_was(native, tmp_path, moment
     run_cli("bake", "--scan", scan, "--probe", 0, 0, 1, "--res", 16, "--out", out, "--no-cache",
             "--quiet", check=True)
     assert not staging.exists()
-    assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "probe_00000.exr"]
+    assert sorted(p.name for p in out.iterdir()) == ["known_space.bin", "manifest.json", "probe_00000.exr"]
 
 
 @pytest.mark.parametrize("moment", ["staging opened", "writing probes"])
@@ -207,4 +207,5 @@ def test_interrupted_rebake_leaves_the_earlier_set_bit_for_bit(native, tmp_path,
     assert not [p for p in tmp_path.iterdir() if ".tmp." in p.name]
     run_cli("bake", "--scan", scan, "--probe", 0, 0, 1, 0.5, 0, 1, "--res", 16, "--out", out,
             "--no-cache", "--quiet", check=True)
-    assert sorted(p.name for p in out.iterdir()) == ["manifest.json", "probe_00000.exr", "probe_00001.exr"]
+    assert sorted(p.name for p in out.iterdir()) == ["known_space.bin", "manifest.json", "probe_00000.exr",
+                                                     "probe_00001.exr"]

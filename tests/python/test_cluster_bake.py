@@ -49,7 +49,7 @@ def local_cluster():
 def assert_same_set(expected: str, actual: str) -> None:
     names = sorted(os.listdir(expected))
     assert sorted(os.listdir(actual)) == names
-    assert len(names) == 7  # six probes and the manifest
+    assert len(names) == 8  # six probes, their known space and the manifest
     for name in names:
         with open(os.path.join(expected, name), "rb") as a, open(os.path.join(actual, name), "rb") as b:
             assert a.read() == b.read(), name

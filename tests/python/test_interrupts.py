@@ -30,7 +30,7 @@ def test_ctrl_c_after_the_set_is_in_place_returns_the_result(native, room_cloud,
 
     summary = job.run(interrupt_once_written)
     assert summary["probe_count"] == 1
-    assert sorted(os.listdir(folder)) == ["manifest.json", "probe_00000.exr"]
+    assert sorted(os.listdir(folder)) == ["known_space.bin", "manifest.json", "probe_00000.exr"]
 
 
 def test_ctrl_c_while_the_work_runs_cancels_it_and_writes_nothing(native, room_cloud, tmp_path):

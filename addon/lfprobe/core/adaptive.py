@@ -82,6 +82,10 @@ def _write_manifest(folder: str, manifest: dict) -> None:
         json.dump(manifest, stream, indent=2, sort_keys=True)
 
 
+# The set's known space (native known_space.hpp's kKnownSpaceName), named by the manifest.
+KNOWN_SPACE_FILE = "known_space.bin"
+
+
 class _GrowingSet:
     """A probe set folder that probes are appended to (layout "positions")."""
 
@@ -105,6 +109,9 @@ class _GrowingSet:
         # A rename within one file system: the EXR appears whole; the manifest that lists it comes last.
         os.replace(os.path.join(one_probe_folder, record["file"]), os.path.join(self.folder, name))
         record["file"] = name
+        # The set's known space grows by the probe's (written before the manifest that lists
+        # the probe); a set that cannot have a whole one has none, and asks every probe on.
+        known = native.load().append_known_space(self.folder, one_probe_folder, len(self.probes))
         if self.manifest is None:
             self.manifest = dict(added, probes=[], layout="positions")
             self.manifest.pop("grid", None)
@@ -117,6 +124,10 @@ class _GrowingSet:
             self.manifest["layout"] = "positions"
             self.manifest.pop("grid", None)
         self.manifest["probes"].append(record)
+        if known:
+            self.manifest["known_space"] = KNOWN_SPACE_FILE
+        else:
+            self.manifest.pop("known_space", None)
         self.manifest.setdefault("bake", {}).setdefault("adaptive", []).append(
             dict(note, file=name, resolution=record["resolution"], bake=added.get("bake", {}).get("plan")))
         _write_manifest(self.folder, self.manifest)

@@ -43,6 +43,10 @@ struct ProbeSetManifest {
     // How a field loads the probes by default (the files stay full precision): chosen from the
     // data at bake time, or set later with set_probe_set_storage.
     ProbeStorage storage;
+    // Where the probes know something about space (known_space.hpp), a file in the set's
+    // folder; empty for sets baked before bakes wrote it ("known_space" in the JSON, absent
+    // then).
+    std::string known_space_file;
 
     [[nodiscard]] nlohmann::json to_json() const;
     [[nodiscard]] static ProbeSetManifest from_json(const nlohmann::json& j,
