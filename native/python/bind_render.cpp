@@ -63,8 +63,10 @@ struct Fidelity {
 RenderSettings render_settings(const std::string& mode, double thickness, bool use_coarse_levels,
                                int tile_size, const Fidelity& fidelity = {},
                                double fallback_thickness = TraceSettings{}.fallback_thickness,
-                               int max_probes_per_ray = FieldTraceSettings{}.max_probes_per_ray) {
+                               int max_probes_per_ray = FieldTraceSettings{}.max_probes_per_ray,
+                               bool stop_where_no_probe_can_answer = true) {
     RenderSettings settings;
+    settings.trace.stop_where_no_probe_can_answer = stop_where_no_probe_can_answer;
     settings.trace.max_probes_per_ray = max_probes_per_ray;
     settings.trace.mode = field_mode_from_name(mode);
     settings.trace.probe.thickness = thickness;
@@ -175,11 +177,12 @@ void bind_render(py::module_& m) {
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
                const std::string& mode, int threads, double thickness, bool use_coarse_levels,
                int tile_size, int spp, const std::string& filter, int blend,
-               double fallback_thickness, int max_probes_per_ray) {
+               double fallback_thickness, int max_probes_per_ray,
+               bool stop_where_no_probe_can_answer) {
                 const Camera cam = camera_from(camera);
-                const RenderSettings settings =
-                    render_settings(mode, thickness, use_coarse_levels, tile_size,
-                                    {spp, filter, blend}, fallback_thickness, max_probes_per_ray);
+                const RenderSettings settings = render_settings(
+                    mode, thickness, use_coarse_levels, tile_size, {spp, filter, blend},
+                    fallback_thickness, max_probes_per_ray, stop_where_no_probe_can_answer);
                 using Result = std::pair<RenderedImage, RenderStats>;
                 return std::make_unique<Job>(
                     std::function<Result(Progress&)>([=](Progress& progress) {
@@ -201,6 +204,7 @@ void bind_render(py::module_& m) {
             py::arg("filter") = Fidelity{}.filter, py::arg("blend") = Fidelity{}.blend,
             py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
             py::arg("max_probes_per_ray") = FieldTraceSettings{}.max_probes_per_ray,
+            py::arg("stop_where_no_probe_can_answer") = true,
             "Start tracing a view in the background (the Blender engine's F12): a Job with "
             "progress in pixels, cancel(), and result() = (image dict, stats dict) as render() "
             "returns.")
@@ -209,11 +213,12 @@ void bind_render(py::module_& m) {
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
                const std::string& output, const std::string& mode, int threads, double thickness,
                bool use_coarse_levels, int tile_size, int spp, const std::string& filter, int blend,
-               double fallback_thickness, int max_probes_per_ray) {
+               double fallback_thickness, int max_probes_per_ray,
+               bool stop_where_no_probe_can_answer) {
                 const Camera cam = camera_from(camera);
-                const RenderSettings settings =
-                    render_settings(mode, thickness, use_coarse_levels, tile_size,
-                                    {spp, filter, blend}, fallback_thickness, max_probes_per_ray);
+                const RenderSettings settings = render_settings(
+                    mode, thickness, use_coarse_levels, tile_size, {spp, filter, blend},
+                    fallback_thickness, max_probes_per_ray, stop_where_no_probe_can_answer);
                 RenderStats stats;
                 RenderedImage image;
                 {
@@ -232,6 +237,7 @@ void bind_render(py::module_& m) {
             py::arg("blend") = Fidelity{}.blend,
             py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
             py::arg("max_probes_per_ray") = FieldTraceSettings{}.max_probes_per_ray,
+            py::arg("stop_where_no_probe_can_answer") = true,
             "Trace a view (camera: a JSON path or text); returns (image dict, stats dict) and "
             "writes the EXR when output is given. threads=0 uses every core. spp: samples per "
             "pixel (1 or a square; colour and coverage averaged, the rest from the pixel "

@@ -69,6 +69,14 @@ struct FieldQuery {
     FieldTraceResult result;
 
     bool ask(std::size_t index) {
+        if (checking()) {
+            // A probe that saw neither free space nor a surface where the ray now starts would
+            // answer UNKNOWN there: not asked (known_space.hpp).
+            const glm::dvec3 from = ray.at(std::max(ray.t_min, result.free_until));
+            if (!field.saw_free(index, from) && !known->surfaces.contains(from)) {
+                return false;
+            }
+        }
         Ray local = ray;
         local.t_min = std::max(ray.t_min, result.free_until);
         const ProbeTraceResult r = field.trace_one(index, local, settings);
@@ -120,14 +128,45 @@ struct FieldQuery {
                fallback.fallback_texel);
     }
 
-    // FieldTraceSettings::max_probes_per_ray: asked that many, the ray stops being passed on.
-    [[nodiscard]] bool out_of_probes() const {
-        return max_probes > 0 && result.probes_tried >= static_cast<std::uint32_t>(max_probes);
+    // No probe is asked any more: FieldTraceSettings::max_probes_per_ray were asked, or the ray
+    // is proven free past every surface voxel along it (stop_where_no_probe_can_answer,
+    // known_space.hpp): a later probe could neither meet a surface nor keep a fallback (both
+    // lie in surface voxels at or past where it starts), and a set without empty texels has no
+    // MISS.
+    [[nodiscard]] bool done() {
+        if (max_probes > 0 && result.probes_tried >= static_cast<std::uint32_t>(max_probes)) {
+            return true;
+        }
+        if (!checking()) {
+            return false;
+        }
+        const glm::dvec3 from = ray.at(std::max(ray.t_min, result.free_until));
+        if (result.free_until != checked_from) {
+            checked_from = result.free_until; // stuck rays ask again from the same point
+            if (!field.seen_by_any(from) && !known->surfaces.contains(from)) {
+                return true; // no probe saw where the ray now starts, nor a surface there
+            }
+        }
+        if (result.probes_tried < 2) {
+            return false; // a ray one of the first probes answers never pays for the walk below
+        }
+        if (std::isnan(last_surface_t)) {
+            last_surface_t = known->last_surface_t(ray, ray.t_min, ray.t_max);
+        }
+        return result.free_until > last_surface_t;
     }
+
+    // Whether the known space is asked: once a first probe did not answer. Most rays of a
+    // complete scan are answered by the first probe asked, and pay nothing for it.
+    [[nodiscard]] bool checking() const { return known != nullptr && result.probes_tried > 0; }
 
     ProbeTraceResult fallback;
     std::size_t fallback_probe = 0;
     int max_probes = 0;
+    const KnownSpaceMask* known = nullptr;
+    double checked_from = std::numeric_limits<double>::quiet_NaN();
+    // The last t along the ray in a surface voxel (-inf: none); NaN until first needed.
+    double last_surface_t = std::numeric_limits<double>::quiet_NaN();
 };
 
 // Candidate probes ordered by squared distance to `point`, ties by index (deterministic).
@@ -152,7 +191,7 @@ bool ask_in_passes(FieldQuery& query, TriedProbes& tried, const Candidate* candi
             if (!tried.worth_asking(index, std::max(query.ray.t_min, query.result.free_until))) {
                 continue;
             }
-            if (query.out_of_probes()) {
+            if (query.done()) {
                 return false;
             }
             if (query.ask(index)) {
@@ -206,12 +245,181 @@ struct ProbeField::RadianceMipCache {
 
 namespace fs = std::filesystem;
 
+// The known space's masks for each distinct (margin, footprint) a trace asked for; the last
+// one asked is read without the lock (one render asks with the same settings for every ray).
+struct ProbeField::KnownSpaceMasks {
+    struct Entry {
+        double margin;
+        double footprint_texels;
+        KnownSpaceMask mask;
+    };
+    // What any probe saw, and per grid cell what its corner probes saw (built once), each
+    // dense where that fits the budget below, else searched.
+    struct Union {
+        SeenVoxels sparse;
+        VoxelMask dense;
+        bool is_dense = false;
+        bool everywhere = false; // a probe the known space does not list: never passed over
+        [[nodiscard]] bool contains(const glm::dvec3& point) const {
+            return everywhere ||
+                   (is_dense ? dense.contains(point) || sparse.beyond_exact_region(point)
+                             : sparse.contains(point));
+        }
+        void add(const SeenVoxels* seen) {
+            if (seen == nullptr) {
+                everywhere = true;
+            } else {
+                sparse.merge(*seen);
+            }
+        }
+        void densify(std::size_t max_bytes) {
+            dense = sparse.dense(max_bytes);
+            is_dense = dense.dims()[0] > 0 || sparse.voxel_count() == 0;
+            if (is_dense) {
+                sparse.drop_voxels(); // its region stays: what lies beyond it counts as seen
+            }
+        }
+    };
+    std::once_flag unions_built;
+    Union any;
+    std::vector<Union> cells;
+    std::vector<Union> probes; // what each probe saw, as a Union of one
+    std::mutex mutex;
+    std::vector<std::unique_ptr<Entry>> entries; // never removed: pointers stay valid
+    std::atomic<const Entry*> last{nullptr};
+};
+
 struct ProbeField::ProbeSlots {
     explicit ProbeSlots(std::size_t count) : slots(count) {}
     std::vector<ProbeSlot> slots; // sized once: slots never move
 };
 
-ProbeField::ProbeField() : radiance_mips_(std::make_shared<RadianceMipCache>()) {}
+ProbeField::ProbeField()
+    : radiance_mips_(std::make_shared<RadianceMipCache>()),
+      known_space_masks_(std::make_shared<KnownSpaceMasks>()) {}
+
+const KnownSpaceMask* ProbeField::known_space_mask(const TraceSettings& settings) const {
+    if (!uses_known_space()) {
+        return nullptr;
+    }
+    // Where a probe can meet a stored surface, or keep one as its fallback: within the larger
+    // of the two thicknesses of it in depth, plus the texel term, and within the texel's cone
+    // sideways; an eye near the probe may take a neighbouring texel's surface (the edge rules).
+    // Three footprints cover the widest octahedral texel's half-diagonal and one neighbour.
+    constexpr double kSidewaysTexels = 3.0;
+    double margin = std::max(settings.thickness, settings.fallback_thickness);
+    const double step = storage().distance_step;
+    if (step > 0.0) {
+        // A packed probe's distances are off by up to one step, its own when coarser.
+        margin += std::max(step, known_space_->farthest_distance() / 65534.0);
+    }
+    const double texels = std::max(settings.thickness_texels, 0.0) + kSidewaysTexels;
+    KnownSpaceMasks& masks = *known_space_masks_;
+    const KnownSpaceMasks::Entry* last = masks.last.load(std::memory_order_acquire);
+    if (last != nullptr && last->margin == margin && last->footprint_texels == texels) {
+        return &last->mask;
+    }
+    const std::lock_guard<std::mutex> lock(masks.mutex);
+    for (const auto& entry : masks.entries) {
+        if (entry->margin == margin && entry->footprint_texels == texels) {
+            masks.last.store(entry.get(), std::memory_order_release);
+            return &entry->mask;
+        }
+    }
+    masks.entries.push_back(std::make_unique<KnownSpaceMasks::Entry>(
+        KnownSpaceMasks::Entry{margin, texels, known_space_->mask(margin, texels)}));
+    masks.last.store(masks.entries.back().get(), std::memory_order_release);
+    return &masks.entries.back()->mask;
+}
+
+bool ProbeField::uses_known_space() const {
+    return known_space_ != nullptr && !known_space_->has_empty_texels();
+}
+
+bool ProbeField::saw_free(std::size_t i, const glm::dvec3& point) const {
+    if (known_space_ == nullptr) {
+        return true;
+    }
+    build_seen_unions();
+    const auto& probes = known_space_masks_->probes;
+    return i >= probes.size() || probes[i].contains(point);
+}
+
+bool ProbeField::seen_by_any(const glm::dvec3& point) const {
+    build_seen_unions();
+    return known_space_masks_->any.contains(point);
+}
+
+bool ProbeField::seen_by_corners(const GridCell& cell, const glm::dvec3& point) const {
+    build_seen_unions();
+    const ProbeGrid& g = grid();
+    const auto cells = [&](std::size_t a) { return std::max(g.counts[a] - 1, 1); };
+    const std::size_t i =
+        static_cast<std::size_t>(cell[0]) +
+        static_cast<std::size_t>(cells(0)) *
+            (static_cast<std::size_t>(cell[1]) +
+             static_cast<std::size_t>(cells(1)) * static_cast<std::size_t>(cell[2]));
+    return known_space_masks_->cells.at(i).contains(point);
+}
+
+void ProbeField::build_seen_unions() const {
+    KnownSpaceMasks& masks = *known_space_masks_;
+    std::call_once(masks.unions_built, [&] {
+        if (known_space_ == nullptr) {
+            return;
+        }
+        // Dense unions cost one bit per 10 cm voxel of their box: 128 MiB for the cells
+        // together at most, 32 MiB for the whole set's.
+        constexpr std::size_t kCellsBudget = std::size_t{128} << 20;
+        constexpr std::size_t kProbesBudget = std::size_t{256} << 20;
+        masks.probes.resize(probe_count());
+        for (std::size_t i = 0; i < probe_count(); ++i) {
+            const SeenVoxels* seen = known_space_->seen_by(i);
+            masks.any.add(seen);
+            masks.probes[i].add(seen);
+        }
+        masks.any.densify(std::size_t{32} << 20);
+        tbb::parallel_for(std::size_t{0}, probe_count(), [&](std::size_t i) {
+            masks.probes[i].densify(std::min(kProbesBudget / probe_count(), std::size_t{2} << 20));
+        });
+        if (!is_grid()) {
+            return;
+        }
+        const ProbeGrid& g = grid();
+        std::array<int, 3> cells{};
+        for (std::size_t a = 0; a < 3; ++a) {
+            cells[a] = std::max(g.counts[a] - 1, 1);
+        }
+        masks.cells.resize(static_cast<std::size_t>(cells[0]) * cells[1] * cells[2]);
+        tbb::parallel_for(std::size_t{0}, masks.cells.size(), [&](std::size_t i) {
+            const GridCell cell{
+                static_cast<int>(i % cells[0]), static_cast<int>((i / cells[0]) % cells[1]),
+                static_cast<int>(i / (static_cast<std::size_t>(cells[0]) * cells[1]))};
+            std::array<std::size_t, 8> corners{};
+            const std::size_t count = grid_cell_corners(g, cell, corners);
+            for (std::size_t k = 0; k < count; ++k) {
+                masks.cells[i].add(known_space_->seen_by(corners[k]));
+            }
+            masks.cells[i].densify(kCellsBudget / masks.cells.size());
+        });
+    });
+}
+
+void ProbeField::build_known_space_from_probes() {
+    std::vector<KnownSpace> parts(probe_count());
+    tbb::parallel_for(std::size_t{0}, probe_count(),
+                      [&](std::size_t i) { parts[i].add_probe(probe(i), i); });
+    // Pairwise, so that each voxel is merged about log2(probes) times.
+    for (std::size_t width = 1; width < parts.size(); width *= 2) {
+        tbb::parallel_for(std::size_t{0}, parts.size(), 2 * width, [&](std::size_t i) {
+            if (i + width < parts.size()) {
+                parts[i].merge(parts[i + width]);
+                parts[i + width] = KnownSpace();
+            }
+        });
+    }
+    known_space_ = std::make_shared<const KnownSpace>(std::move(parts.front()));
+}
 
 const ProbeField::ProbeSlot& ProbeField::slot(std::size_t i) const {
     const ProbeSlot& s = slots_->slots.at(i);
@@ -273,6 +481,10 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
         use_storage(field.manifest_, *storage);
     }
     field.slots_ = std::make_shared<ProbeSlots>(count);
+    if (!field.manifest_.known_space_file.empty()) {
+        field.known_space_ = std::make_shared<const KnownSpace>(
+            KnownSpace::read((fs::path(folder) / field.manifest_.known_space_file).string()));
+    }
     if (lazy) {
         // Every probe's file must be there now, so that a missing one is a clear error of
         // opening the set rather than a surprise in the middle of a frame.
@@ -303,12 +515,16 @@ ProbeField ProbeField::load(const std::string& folder, Progress* progress, int c
         field.manifest_.probes[i].memory_bytes = field.probe(i).memory_bytes();
     }
     field.note_what_probes_know(true);
+    if (field.known_space_ == nullptr) {
+        field.build_known_space_from_probes(); // a set baked before bakes wrote it
+    }
     return field;
 }
 
 ProbeField::ProbeField(const ProbePlacement& placement, std::vector<ProbeMap> probes,
                        const glm::dvec3& world_offset)
-    : radiance_mips_(std::make_shared<RadianceMipCache>()) {
+    : radiance_mips_(std::make_shared<RadianceMipCache>()),
+      known_space_masks_(std::make_shared<KnownSpaceMasks>()) {
     manifest_.world_offset = world_offset;
     manifest_.placement = placement;
     if (probes.empty()) {
@@ -336,6 +552,7 @@ ProbeField::ProbeField(const ProbePlacement& placement, std::vector<ProbeMap> pr
         });
     });
     note_what_probes_know(true);
+    build_known_space_from_probes();
 }
 
 void ProbeField::note_what_probes_know(bool from_maps) {
@@ -511,6 +728,9 @@ FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
                                            const FieldTraceSettings& settings) const {
     FieldQuery query{*this, ray, settings.probe, {}, {}, 0, settings.max_probes_per_ray};
     query.result.free_until = ray.t_min;
+    if (settings.stop_where_no_probe_can_answer) {
+        query.known = known_space_mask(settings.probe);
+    }
     const std::size_t wanted =
         std::min(probe_count(), static_cast<std::size_t>(std::max(settings.max_probes, 1)));
     // The `wanted` nearest, kept sorted in a small buffer.
@@ -553,10 +773,21 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
     }
     FieldQuery query{*this, ray, settings.probe, {}, {}, 0, settings.max_probes_per_ray};
     query.result.free_until = ray.t_min;
+    if (settings.stop_where_no_probe_can_answer) {
+        query.known = known_space_mask(settings.probe);
+    }
     TriedProbes tried;
     while (const std::optional<GridCellSpan> span = walk.next()) {
         // A cell the ray already left behind the proven-free distance has nothing to add.
         if (span->t_leave >= query.result.free_until || span->first) {
+            if (query.checking()) {
+                // A cell none of whose corners saw where the ray now starts, with no surface
+                // there: each of them would be passed over (FieldQuery::ask).
+                const glm::dvec3 from = ray.at(std::max(ray.t_min, query.result.free_until));
+                if (!seen_by_corners(span->cell, from) && !query.known->surfaces.contains(from)) {
+                    continue;
+                }
+            }
             const glm::dvec3 entry = ray.at(std::max(span->t_enter, query.result.free_until));
             std::array<std::size_t, 8> corner_index{};
             const std::size_t corner_count = grid_cell_corners(grid(), span->cell, corner_index);
@@ -577,7 +808,7 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
             if (ask_in_passes(query, tried, corners.data(), useful)) {
                 return query.result;
             }
-            if (query.out_of_probes()) {
+            if (query.done()) {
                 break;
             }
         }

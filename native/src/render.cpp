@@ -34,19 +34,21 @@ nlohmann::json RenderStats::to_json() const {
 
 nlohmann::json render_settings_json(const RenderSettings& settings) {
     const TraceSettings& p = settings.trace.probe;
-    return nlohmann::json{{"mode", field_mode_name(settings.trace.mode)},
-                          {"max_probes", settings.trace.max_probes},
-                          {"thickness", p.thickness},
-                          {"fallback_thickness", p.fallback_thickness},
-                          {"max_probes_per_ray", settings.trace.max_probes_per_ray},
-                          {"thickness_texels", p.thickness_texels},
-                          {"use_coarse_levels", p.use_coarse_levels},
-                          {"eye_at_probe_distance", p.eye_at_probe_distance},
-                          {"filter", radiance_filter_name(settings.trace.filter)},
-                          {"blend", settings.trace.blend},
-                          {"samples_per_pixel", settings.samples_per_pixel},
-                          {"tile_size", settings.tile_size},
-                          {"sample", {settings.sample_x, settings.sample_y}}};
+    return nlohmann::json{
+        {"mode", field_mode_name(settings.trace.mode)},
+        {"max_probes", settings.trace.max_probes},
+        {"thickness", p.thickness},
+        {"fallback_thickness", p.fallback_thickness},
+        {"max_probes_per_ray", settings.trace.max_probes_per_ray},
+        {"stop_where_no_probe_can_answer", settings.trace.stop_where_no_probe_can_answer},
+        {"thickness_texels", p.thickness_texels},
+        {"use_coarse_levels", p.use_coarse_levels},
+        {"eye_at_probe_distance", p.eye_at_probe_distance},
+        {"filter", radiance_filter_name(settings.trace.filter)},
+        {"blend", settings.trace.blend},
+        {"samples_per_pixel", settings.samples_per_pixel},
+        {"tile_size", settings.tile_size},
+        {"sample", {settings.sample_x, settings.sample_y}}};
 }
 
 namespace {

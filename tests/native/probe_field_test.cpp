@@ -315,6 +315,7 @@ TEST(Grid, ACellWhoseProbesKnowNothingIsSkipped) {
     EXPECT_TRUE(field.knows_nothing(2));
     FieldTraceSettings ask_all;
     ask_all.skip_probes_that_know_nothing = false;
+    ask_all.stop_where_no_probe_can_answer = false;
 
     const Ray stays = make_ray({0.9, 0.05, 1.25}, {1.0, 0.02, 0.01});
     const FieldTraceResult skipped = field.trace(stays);

@@ -21,6 +21,8 @@
 
 #include <glm/vec3.hpp>
 
+#include "lfprobe/grid_walk.hpp"
+#include "lfprobe/known_space.hpp"
 #include "lfprobe/min_distance_pyramid.hpp"
 #include "lfprobe/probe_map.hpp"
 #include "lfprobe/probe_placement.hpp"
@@ -64,6 +66,12 @@ struct FieldTraceSettings {
     // answers for time where most rays find no answer (a partial scan's unseen parts): it is
     // not exact, and its effect is measured, not assumed.
     int max_probes_per_ray = 0;
+    // Stop asking probes where the set's known space (known_space.hpp) shows that none can
+    // answer: the ray now starts where no probe saw free space or a surface, or it is proven
+    // free past every surface along it. Only for sets without empty texels (no MISS anywhere)
+    // with a known space, as every bake writes (false: ask on; the same answer, only slower;
+    // for tests and measurements).
+    bool stop_where_no_probe_can_answer = true;
 };
 
 struct FieldTraceResult {
@@ -129,6 +137,19 @@ public:
     // Probe i's prefiltered radiance (the footprint filter's); every probe's are built on the
     // first call, from any thread, and kept: memory only sets that are rendered with it pay.
     [[nodiscard]] const RadianceMips& radiance_mips(std::size_t i) const;
+    // Where the probes know something about space (read with the set, or built from the probes
+    // when it was opened whole and has no known-space file); null when the set carries none.
+    [[nodiscard]] const KnownSpace* known_space() const { return known_space_.get(); }
+    // The known space's masks for `settings` (built on first use for each distinct thickness
+    // and fallback, from any thread, and kept); null where they cannot prove anything (no known
+    // space, or a set with empty texels).
+    [[nodiscard]] const KnownSpaceMask* known_space_mask(const TraceSettings& settings) const;
+    // Whether probe i may have seen `point` (local frame) free: false only where its known
+    // space says it did not (known_space.hpp's SeenVoxels); never reads the probe.
+    [[nodiscard]] bool saw_free(std::size_t i, const glm::dvec3& point) const;
+    // The same for any probe of the set, and for any corner probe of a grid cell.
+    [[nodiscard]] bool seen_by_any(const glm::dvec3& point) const;
+    [[nodiscard]] bool seen_by_corners(const GridCell& cell, const glm::dvec3& point) const;
     // Maps and coarse levels of every probe in memory, and their prefiltered radiance once a
     // render with the footprint filter has built it.
     [[nodiscard]] std::size_t memory_bytes() const;
@@ -184,6 +205,12 @@ private:
     struct RadianceMipCache;
     std::shared_ptr<RadianceMipCache> radiance_mips_;
     std::vector<std::uint8_t> knows_nothing_; // per probe: 1 when every texel is unknown
+    std::shared_ptr<const KnownSpace> known_space_;
+    struct KnownSpaceMasks;
+    std::shared_ptr<KnownSpaceMasks> known_space_masks_;
+    void build_known_space_from_probes();
+    [[nodiscard]] bool uses_known_space() const;
+    void build_seen_unions() const;
 };
 
 } // namespace lfprobe

@@ -1,0 +1,254 @@
+// Where a set's probes know something (docs/DESIGN.md §4 "Rays that no probe can answer"): the
+// seen voxels hold every point a probe saw free, the surface walk finds the last surface voxel
+// along a ray, a rebuild is bit-identical, the file round-trips and refuses damage, and a field
+// that stops asking where no probe can answer gives every ray the answer of asking on.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include "lfprobe/error.hpp"
+#include "lfprobe/known_space.hpp"
+#include "lfprobe/probe_field.hpp"
+#include "lfprobe/probe_set.hpp"
+#include "temp_folder.hpp"
+#include "trace_scenes.hpp"
+
+using namespace lfprobe;
+using lfprobe::testing::BoxRoomScene;
+namespace scenes = lfprobe::testing;
+
+namespace {
+
+// A probe of the room with what a one-station partial scan leaves: the directions with x < 0
+// unknown, and a patch of holes.
+ProbeMap partial_probe(const BoxRoomScene& room, const glm::dvec3& centre, int n) {
+    ProbeMap map = scenes::analytic_probe_with_holes(room, centre, n);
+    for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+            if (oct::texel_direction({x, y}, n).x < 0.0f) {
+                map.set_unknown(oct::texel_index({x, y}, n));
+            }
+        }
+    }
+    return map;
+}
+
+std::vector<ProbeMap> partial_grid_probes(const BoxRoomScene& room, const ProbePlacement& placement,
+                                          int n) {
+    std::vector<ProbeMap> probes;
+    for (std::size_t i = 0; i < placement.positions.size(); ++i) {
+        // Every fourth probe sees the room whole: rays the others cannot answer go on to it.
+        probes.push_back(i % 4 == 0 ? scenes::analytic_probe(room, placement.positions[i], n)
+                                    : partial_probe(room, placement.positions[i], n));
+    }
+    return probes;
+}
+
+} // namespace
+
+TEST(KnownSpace, SeenVoxelsHoldEveryPointTheProbeSawFree) {
+    const BoxRoomScene room = BoxRoomScene{};
+    const glm::dvec3 centre(0.3, -0.2, 1.1);
+    const int n = 64;
+    const ProbeMap map = partial_probe(room, centre, n);
+    const SeenVoxels seen(map);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> unit(0.0, 1.0);
+    std::uniform_int_distribution<int> texel(0, n - 1);
+    int checked = 0;
+    while (checked < 20000) {
+        const oct::Texel t{texel(rng), texel(rng)};
+        const float d = map.distance_at(oct::texel_index(t, n));
+        if (!std::isfinite(d)) {
+            continue;
+        }
+        // Anywhere in the texel's cone, in front of its surface.
+        const glm::vec2 uv((static_cast<float>(t.x) + static_cast<float>(unit(rng))) / n,
+                           (static_cast<float>(t.y) + static_cast<float>(unit(rng))) / n);
+        const glm::dvec3 dir(oct::decode(uv));
+        const glm::dvec3 point = centre + unit(rng) * static_cast<double>(d) * dir;
+        ASSERT_TRUE(seen.contains(point)) << "texel " << t.x << "," << t.y;
+        ++checked;
+    }
+    // Not everything: behind the walls, and where the probe saw nothing (x well below it,
+    // whose directions are all unknown).
+    EXPECT_FALSE(seen.contains(centre + glm::dvec3(0.0, 0.0, 5.0)));
+    EXPECT_FALSE(seen.contains(centre + glm::dvec3(-1.2, 0.0, 0.0)));
+    EXPECT_GT(seen.voxel_count(), 0u);
+
+    // A probe that saw far (through a window, 1 km): marked out to its region only, and
+    // everything beyond that region counts as seen; inside it the walls still hold.
+    ProbeMap far = map;
+    const oct::Texel window{n / 2, n / 2};
+    far.distance[oct::texel_index(window, n)] = 1000.0f;
+    const SeenVoxels far_seen(far);
+    const glm::dvec3 out(oct::texel_direction(window, n));
+    EXPECT_TRUE(far_seen.contains(centre + 500.0 * out));
+    EXPECT_TRUE(far_seen.contains(centre + glm::dvec3(0.0, 0.0, -40.0))); // beyond the region
+    EXPECT_FALSE(far_seen.contains(centre + glm::dvec3(0.0, 5.0, 0.0)));  // the window looks up
+    EXPECT_FALSE(far_seen.beyond_exact_region(centre + glm::dvec3(0.0, 5.0, 0.0)));
+}
+
+TEST(KnownSpace, TheSurfaceWalkFindsTheLastSurfaceVoxelAlongARay) {
+    const BoxRoomScene room = BoxRoomScene{};
+    KnownSpace space;
+    space.add_probe(partial_probe(room, {0.3, -0.2, 1.1}, 128), 0);
+    const KnownSpaceMask mask = space.mask(0.02, 4.0);
+    ASSERT_GT(mask.surfaces.set_count(), 0u);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    for (int i = 0; i < 2000; ++i) {
+        Ray ray;
+        ray.origin = glm::dvec3(1.5 * u(rng), 1.2 * u(rng), 1.2 + u(rng));
+        ray.direction = glm::normalize(glm::dvec3(u(rng), u(rng), u(rng)));
+        ray.t_min = 0.01;
+        const double last = mask.surfaces.last_set_t(ray, ray.t_min, 20.0);
+        // Sampled finely: no set voxel after `last`, and one just before it.
+        double sampled = -std::numeric_limits<double>::infinity();
+        for (double t = ray.t_min; t <= 20.0; t += 0.002) {
+            if (mask.surfaces.contains(ray.at(t))) {
+                sampled = t;
+            }
+        }
+        // Never before a set voxel the samples met (the stop must not come early) and, where
+        // there is one, at one: a set voxel within a hair before it.
+        EXPECT_GE(last, sampled - 1e-9) << i;
+        if (!std::isinf(last)) {
+            bool at_one = false;
+            for (double t = last; t > last - mask.surfaces.voxel() && !at_one; t -= 1e-5) {
+                at_one = mask.surfaces.contains(ray.at(t));
+            }
+            EXPECT_TRUE(at_one) << i << " at " << last;
+        }
+        EXPECT_EQ(mask.last_surface_t(ray, ray.t_min, 20.0) == last ||
+                      std::abs(mask.last_surface_t(ray, ray.t_min, 20.0) - last) < 1e-9,
+                  true)
+            << i;
+    }
+}
+
+TEST(KnownSpace, ARebuildInAnyOrderIsBitIdenticalAndTheFileRoundTrips) {
+    const BoxRoomScene room = BoxRoomScene{};
+    const ProbePlacement placement = ProbePlacement::from_grid(
+        ProbeGrid::spanning({-1.0, -0.5, 0.8}, {1.0, 0.5, 1.6}, {3, 2, 1}));
+    const std::vector<ProbeMap> probes = partial_grid_probes(room, placement, 64);
+    KnownSpace forward;
+    for (std::size_t i = 0; i < probes.size(); ++i) {
+        forward.add_probe(probes[i], i);
+    }
+    KnownSpace halves;
+    KnownSpace back;
+    for (std::size_t i = probes.size(); i-- > 3;) {
+        back.add_probe(probes[i], i);
+    }
+    for (std::size_t i = 0; i < 3; ++i) {
+        halves.add_probe(probes[i], i);
+    }
+    back.merge(halves);
+    EXPECT_TRUE(forward == back);
+    EXPECT_THROW(back.merge(halves), InputError); // a probe added twice
+
+    const std::filesystem::path folder = scenes::fresh_dir("known_space", "round_trip");
+    const std::string path = (folder / kKnownSpaceName).string();
+    forward.write(path);
+    EXPECT_TRUE(KnownSpace::read(path) == forward);
+    // Damaged: cut short, and with bytes after its end.
+    const std::string bytes = scenes::file_bytes(path);
+    for (const std::string& damaged : {bytes.substr(0, bytes.size() - 5), bytes + "x",
+                                       std::string("LFPKNOWN"), std::string("not a file")}) {
+        scenes::write_file(path, damaged);
+        EXPECT_THROW((void)KnownSpace::read(path), InputError) << damaged.size();
+    }
+}
+
+TEST(Grid, RaysNoProbeCanAnswerStopEarlyWithTheAnswersOfAskingOn) {
+    // A grid most of whose probes saw half the room: rays into the unseen half end UNKNOWN
+    // after fewer probes, and every ray's answer is the one asking on gives.
+    const BoxRoomScene room = BoxRoomScene{};
+    const ProbePlacement placement = ProbePlacement::from_grid(
+        ProbeGrid::spanning({-1.5, -1.0, 0.6}, {1.5, 1.0, 1.8}, {4, 3, 2}));
+    const ProbeField field(placement, partial_grid_probes(room, placement, 128));
+    ASSERT_NE(field.known_space(), nullptr);
+    FieldTraceSettings ask_on;
+    ask_on.stop_where_no_probe_can_answer = false;
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::size_t asked = 0;
+    std::size_t asked_on = 0;
+    std::size_t hits = 0;
+    for (int i = 0; i < 4000; ++i) {
+        Ray ray;
+        ray.origin = glm::dvec3(1.8 * u(rng), 1.3 * u(rng), 1.25 + 1.1 * u(rng));
+        ray.direction = glm::normalize(glm::dvec3(u(rng), u(rng), u(rng)));
+        ray.t_min = 0.01;
+        const FieldTraceResult stopped = field.trace(ray);
+        const FieldTraceResult full = field.trace(ray, ask_on);
+        ASSERT_EQ(stopped.status, full.status) << i;
+        ASSERT_EQ(stopped.probe, full.probe) << i;
+        if (full.status == TraceStatus::Hit) {
+            ++hits;
+            ASSERT_EQ(stopped.t, full.t) << i;
+            ASSERT_EQ(stopped.radiance, full.radiance) << i;
+            ASSERT_EQ(stopped.normal, full.normal) << i;
+            ASSERT_EQ(stopped.texel, full.texel) << i;
+        }
+        asked += stopped.probes_tried;
+        asked_on += full.probes_tried;
+    }
+    std::printf("%zu HIT of 4000 rays; probes asked %.2f a ray, %.2f asking on\n", hits,
+                static_cast<double>(asked) / 4000.0, static_cast<double>(asked_on) / 4000.0);
+    EXPECT_GT(hits, 1000u);
+    EXPECT_LT(asked, asked_on);
+
+    // A set with an empty texel can answer MISS anywhere: it asks on.
+    std::vector<ProbeMap> probes = partial_grid_probes(room, placement, 32);
+    probes[0].distance[0] = kEmptyDistance;
+    const ProbeField open(placement, std::move(probes));
+    ASSERT_NE(open.known_space(), nullptr);
+    EXPECT_TRUE(open.known_space()->has_empty_texels());
+    EXPECT_EQ(open.known_space_mask(TraceSettings{}), nullptr);
+}
+
+TEST(Grid, ABakedSetCarriesItsKnownSpaceAndALazyOpenUsesItWithoutReadingProbes) {
+    const BoxRoomScene room = BoxRoomScene{};
+    const ProbePlacement placement = ProbePlacement::from_grid(
+        ProbeGrid::spanning({-1.5, -1.0, 0.6}, {1.5, 1.0, 1.8}, {4, 3, 2}));
+    const ProbeField field(placement, partial_grid_probes(room, placement, 64));
+    const std::string set = (scenes::fresh_dir("known_space", "set") / "set").string();
+    ProbeSetManifest manifest;
+    manifest.placement = placement;
+    (void)write_probe_set(set, manifest, [&](std::size_t i) { return field.probe(i); });
+    const ProbeSetManifest written = read_manifest(set);
+    EXPECT_EQ(written.known_space_file, kKnownSpaceName);
+    // The probes' own known spaces were merged and removed.
+    std::size_t files = 0;
+    for (const auto& entry : std::filesystem::directory_iterator(set)) {
+        const std::string name = entry.path().filename().string();
+        EXPECT_EQ(name.find(".known"), std::string::npos) << name;
+        ++files;
+    }
+    EXPECT_EQ(files, placement.positions.size() + 2); // probes, manifest, known space
+    EXPECT_TRUE(KnownSpace::read((std::filesystem::path(set) / kKnownSpaceName).string()) ==
+                *field.known_space());
+
+    const ProbeField lazy = ProbeField::load(set, nullptr, 0, {}, true);
+    ASSERT_NE(lazy.known_space(), nullptr);
+    EXPECT_EQ(lazy.loaded_probe_count(), 0u);
+    // Where no probe saw the space (beyond the unseen wall), probe 0 is asked and no other.
+    Ray ray;
+    ray.origin = glm::dvec3(-1.4, 0.0, 1.2);
+    ray.direction = glm::dvec3(-1.0, 0.0, 0.0);
+    ray.t_min = 0.01;
+    FieldTraceSettings ask_on;
+    ask_on.stop_where_no_probe_can_answer = false;
+    const FieldTraceResult stopped = lazy.trace(ray);
+    const FieldTraceResult full = lazy.trace(ray, ask_on);
+    EXPECT_EQ(stopped.status, full.status);
+    EXPECT_LE(stopped.probes_tried, full.probes_tried);
+}
