@@ -436,7 +436,8 @@ namespace {
 
 // A probe that never saw where the ray starts answers UNKNOWN there, whatever lies beyond: the
 // walk's first texel is the one around the direction to the start, and an unknown texel stops
-// it. In a partial scan most probes a ray asks are such probes, and this answer costs nine
+// it, as does a surface the start lies behind (beyond the fallback's reach, so that no fallback
+// is kept). In a partial scan most probes a ray asks are such probes, and this answer costs nine
 // texel reads instead of the walk's set-up and its descent through every coarse level. The
 // texels around are read too, so that the texel the walk's own arithmetic picks at an edge or
 // across an octant's fold is unknown as well; a start near the probe centre (where the walk
@@ -455,10 +456,15 @@ dismiss_if_unknown_at_start(const ProbeMap& map, const glm::dvec3& o, const glm:
     }
     const int n = map.resolution;
     const oct::Texel home = oct::texel_of_direction(glm::vec3(start / length), n);
+    // Behind a surface by more than the fallback's reach stops the walk at its first texel too
+    // (passing behind, or meeting the surface's back face), with no fallback kept.
+    const double reach = std::max(settings.thickness, settings.fallback_thickness);
+    const double reach_per_metre = thickness_per_metre(settings, n);
     for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
             const oct::Texel t = oct::wrap_texel(home.x + dx, home.y + dy, n);
-            if (!std::isnan(map.distance_at(oct::texel_index(t, n)))) {
+            const auto r = static_cast<double>(map.distance_at(oct::texel_index(t, n)));
+            if (!std::isnan(r) && !(length > r + reach + reach_per_metre * r)) {
                 return std::nullopt;
             }
         }

@@ -269,11 +269,13 @@ TEST(Trace, ARayThroughAFullyUnknownProbeIsDismissedWithoutWalkingItsTexels) {
 }
 
 TEST(Trace, DismissingUnknownStartsNeverChangesTheAnswer) {
-    // Partly seen probes (holes of unknown and of empty texels), rays from anywhere in the room:
-    // the quick look answers exactly what the walk answers, where it answers at all.
+    // Partly seen probes (holes of unknown and of empty texels), rays from anywhere in the room
+    // (behind the sphere too): the quick look answers exactly what the walk answers, fallback
+    // included, where it answers at all.
     const BoxRoomScene scene;
     std::mt19937 rng(33);
     std::size_t dismissed = 0;
+    std::size_t behind = 0; // dismissed from behind a surface the probe saw
     for (const int n : {96, 61}) {
         const glm::dvec3 centre(0.3, -0.2, 1.1);
         ProbeMap map = scenes::analytic_probe_with_holes(scene, centre, n);
@@ -298,8 +300,15 @@ TEST(Trace, DismissingUnknownStartsNeverChangesTheAnswer) {
             ASSERT_EQ(quick.t, walked.t) << "ray " << i;
             ASSERT_EQ(quick.free_until, walked.free_until) << "ray " << i;
             ASSERT_EQ(quick.radiance, walked.radiance) << "ray " << i;
+            ASSERT_EQ(quick.has_fallback, walked.has_fallback) << "ray " << i;
+            ASSERT_EQ(quick.t_fallback, walked.t_fallback) << "ray " << i;
             dismissed += quick.steps() < walked.steps() ? 1 : 0;
+            behind += quick.steps() < walked.steps() && quick.status == TraceStatus::Unknown &&
+                              !std::isnan(map.distance_at(oct::texel_index(quick.texel, n)))
+                          ? 1
+                          : 0;
         }
     }
     EXPECT_GT(dismissed, 1000u) << "the quick look must be taken where it can";
+    EXPECT_GT(behind, 100u) << "starts behind the sphere must be dismissed too";
 }

@@ -68,8 +68,9 @@ struct TraceSettings {
     // is the same, only slower; for tests and measurements).
     bool order_by_image = true;
     // Answer UNKNOWN at once where the probe never saw the ray's start (the texels around the
-    // direction to it are unknown), without setting up the walk (false: walk; the answer is
-    // the same, only slower; for tests and measurements).
+    // direction to it are unknown, or hold surfaces the start lies behind by more than the
+    // fallback's reach), without setting up the walk (false: walk; the answer is the same, only
+    // slower; for tests and measurements).
     bool dismiss_unknown_start = true;
     // A ray origin closer than this (metres) to the probe centre is at the probe: its answer is
     // one texel lookup.
