@@ -43,6 +43,31 @@ T take(const std::string& in, std::size_t& at, const std::string& path) {
     return value;
 }
 
+// A record count, checked against the bytes left for records of `record_bytes` each.
+std::uint64_t take_count(const std::string& in, std::size_t& at, const std::string& path,
+                         std::size_t record_bytes, const char* what) {
+    const auto count = take<std::uint64_t>(in, at, path);
+    if (count > (in.size() - at) / record_bytes) {
+        throw InputError(path + ": the known-space file says " + std::to_string(count) + " " +
+                         what + " but is shorter");
+    }
+    return count;
+}
+
+// A voxel or block index, each coordinate within `limit`.
+std::array<std::int32_t, 3> take_index(const std::string& in, std::size_t& at,
+                                       const std::string& path, double limit, const char* what) {
+    std::array<std::int32_t, 3> index{};
+    for (std::int32_t& i : index) {
+        i = take<std::int32_t>(in, at, path);
+        if (!(std::abs(static_cast<double>(i)) < limit)) {
+            throw InputError(path + ": a " + std::string(what) +
+                             " of the known-space file is out of range");
+        }
+    }
+    return index;
+}
+
 } // namespace
 
 // --- VoxelMask -----------------------------------------------------------------------------
@@ -734,24 +759,15 @@ SeenVoxels SeenVoxels::read_from(const std::string& in, std::size_t& at, const s
             throw InputError(path + ": a seen region of the known-space file is empty or NaN");
         }
     }
-    const auto count = take<std::uint64_t>(in, at, path);
     constexpr std::size_t kBlockBytes = 3 * sizeof(std::int32_t) + 8 * sizeof(std::uint64_t);
-    if (count > (in.size() - at) / kBlockBytes) {
-        throw InputError(path + ": the known-space file says " + std::to_string(count) +
-                         " seen blocks but is shorter");
-    }
-    seen.blocks_.resize(count);
+    seen.blocks_.resize(take_count(in, at, path, kBlockBytes, "seen blocks"));
     for (Block& b : seen.blocks_) {
-        b.x = take<std::int32_t>(in, at, path);
-        b.y = take<std::int32_t>(in, at, path);
-        b.z = take<std::int32_t>(in, at, path);
+        const auto [x, y, z] = take_index(in, at, path, kMaxVoxelIndex / kBlock, "seen block");
+        b.x = x;
+        b.y = y;
+        b.z = z;
         for (std::uint64_t& word : b.bits) {
             word = take<std::uint64_t>(in, at, path);
-        }
-        if (!(std::abs(static_cast<double>(b.x)) < kMaxVoxelIndex / kBlock &&
-              std::abs(static_cast<double>(b.y)) < kMaxVoxelIndex / kBlock &&
-              std::abs(static_cast<double>(b.z)) < kMaxVoxelIndex / kBlock)) {
-            throw InputError(path + ": a seen block of the known-space file is out of range");
         }
     }
     const auto order = [](const Block& a, const Block& b) {
@@ -926,31 +942,22 @@ KnownSpace KnownSpace::read(const std::string& path) {
     KnownSpace space;
     space.has_empty_ = take<std::uint8_t>(bytes, at, path) != 0;
     space.farthest_ = take<double>(bytes, at, path);
-    const auto in_range = [](std::int32_t i) {
-        return std::abs(static_cast<double>(i)) < kMaxVoxelIndex;
-    };
-    const auto surfaces = take<std::uint64_t>(bytes, at, path);
     constexpr std::size_t kSurfaceBytes = 3 * sizeof(std::int32_t) + sizeof(float);
-    if (surfaces > (bytes.size() - at) / kSurfaceBytes) {
-        throw InputError(path + ": the known-space file says " + std::to_string(surfaces) +
-                         " surface voxels but is shorter");
-    }
-    space.surfaces_.resize(surfaces);
+    space.surfaces_.resize(take_count(bytes, at, path, kSurfaceBytes, "surface voxels"));
     for (SurfaceVoxel& v : space.surfaces_) {
-        v.x = take<std::int32_t>(bytes, at, path);
-        v.y = take<std::int32_t>(bytes, at, path);
-        v.z = take<std::int32_t>(bytes, at, path);
+        const auto [x, y, z] = take_index(bytes, at, path, kMaxVoxelIndex, "surface voxel");
+        v.x = x;
+        v.y = y;
+        v.z = z;
         v.footprint = take<float>(bytes, at, path);
-        if (!(v.footprint >= 0.0f && std::isfinite(v.footprint)) || !in_range(v.x) ||
-            !in_range(v.y) || !in_range(v.z)) {
-            throw InputError(path + ": a surface voxel of the known-space file is out of range");
+        if (!(v.footprint >= 0.0f && std::isfinite(v.footprint))) {
+            throw InputError(path + ": a surface voxel's footprint in the known-space file is " +
+                             std::to_string(v.footprint));
         }
     }
-    const auto probes = take<std::uint64_t>(bytes, at, path);
-    if (probes > bytes.size() - at) {
-        throw InputError(path + ": the known-space file says " + std::to_string(probes) +
-                         " probes but is shorter");
-    }
+    // A probe's record: its index, its region (a flag, 6 doubles) and its block count at least.
+    constexpr std::size_t kProbeBytes = 8 + 1 + 6 * 8 + 8;
+    const std::uint64_t probes = take_count(bytes, at, path, kProbeBytes, "probes");
     for (std::uint64_t i = 0; i < probes; ++i) {
         const auto index = take<std::uint64_t>(bytes, at, path);
         if (!space.seen_.empty() && index <= space.seen_.back().first) {
