@@ -481,6 +481,9 @@ void KnownSpace::add_probe(const ProbeMap& map, std::size_t index) {
     tbb::parallel_for(0, n, [&](int y) {
         std::vector<SurfaceVoxel>& row = rows[static_cast<std::size_t>(y)];
         for (int x = 0; x < n; ++x) {
+            if (empty.load(std::memory_order_relaxed)) {
+                return; // a probe with an empty texel is never asked about: nothing to keep
+            }
             const oct::Texel texel{x, y};
             const float d = map.distance_at(oct::texel_index(texel, n));
             if (std::isnan(d)) {
@@ -509,12 +512,19 @@ void KnownSpace::add_probe(const ProbeMap& map, std::size_t index) {
             }
         }
     });
+    KnownSpace probe;
+    if (empty.load()) {
+        // A set with an empty texel can answer MISS anywhere and never uses its known space:
+        // the flag alone, the same whichever rows were read before the empty texel was met.
+        probe.has_empty_ = true;
+        probe.seen_.emplace_back(index, SeenVoxels());
+        merge(probe);
+        return;
+    }
     if (too_far.load()) {
         throw InputError("known space: a surface of probe " + std::to_string(index) +
                          " lies too far out for voxels of " + std::to_string(kSurfaceVoxel) + " m");
     }
-    KnownSpace probe;
-    probe.has_empty_ = empty.load();
     std::size_t total = 0;
     for (const auto& row : rows) {
         total += row.size();
@@ -531,12 +541,7 @@ void KnownSpace::add_probe(const ProbeMap& map, std::size_t index) {
     SeenVoxels seen;
     tbb::parallel_invoke(
         [&] { tbb::parallel_sort(probe.surfaces_.begin(), probe.surfaces_.end(), surface_order); },
-        [&] {
-            // A set with empty texels never uses what its probes saw.
-            if (!probe.has_empty_) {
-                seen = SeenVoxels(map);
-            }
-        });
+        [&] { seen = SeenVoxels(map); });
     probe.surfaces_.erase(
         std::unique(probe.surfaces_.begin(), probe.surfaces_.end(), same_surface_voxel),
         probe.surfaces_.end());
