@@ -186,7 +186,8 @@ Mesh mesh_from_arrays(
 // A simulated scanner's settings as start_simulate_scan and start_simulate_scans take them.
 ScannerSettings scanner_settings(const std::vector<double>& position, double step_deg,
                                  double noise_mm, double vertical_fov, std::uint64_t seed,
-                                 double horizontal_fov, double horizontal_start) {
+                                 double horizontal_fov, double horizontal_start,
+                                 bool filter_textures) {
     ScannerSettings s;
     s.position = dvec3_from(position, "scanner position");
     s.step_deg = step_deg;
@@ -195,6 +196,7 @@ ScannerSettings scanner_settings(const std::vector<double>& position, double ste
     s.horizontal_fov_deg = horizontal_fov;
     s.horizontal_start_deg = horizontal_start;
     s.seed = seed;
+    s.filter_textures = filter_textures;
     return s;
 }
 
@@ -377,9 +379,10 @@ void bind_mesh(py::module_& m) {
         "start_simulate_scan",
         [](MeshArg mesh, const std::string& out_path, const std::vector<double>& position,
            double step_deg, double noise_mm, double vertical_fov, std::uint64_t seed,
-           double horizontal_fov, double horizontal_start) {
-            const ScannerSettings s = scanner_settings(position, step_deg, noise_mm, vertical_fov,
-                                                       seed, horizontal_fov, horizontal_start);
+           double horizontal_fov, double horizontal_start, bool filter_textures) {
+            const ScannerSettings s =
+                scanner_settings(position, step_deg, noise_mm, vertical_fov, seed, horizontal_fov,
+                                 horizontal_start, filter_textures);
             return std::make_unique<Job>(
                 std::function<ScanStats(Progress&)>([=](Progress& progress) {
                     progress.begin_stage("loading mesh", 1);
@@ -393,16 +396,19 @@ void bind_mesh(py::module_& m) {
         py::arg("noise_mm") = 2.0, py::arg("vertical_fov") = 300.0, py::arg("seed") = 1,
         py::arg("horizontal_fov") = ScannerSettings{}.horizontal_fov_deg,
         py::arg("horizontal_start") = ScannerSettings{}.horizontal_start_deg,
+        py::arg("filter_textures") = ScannerSettings{}.filter_textures,
         "Start a simulated scan of `mesh` from `position` (world) into the .xyz `out_path`; the "
         "Job's result is {rays, points, seconds}. horizontal_fov < 360 sweeps only the azimuths "
         "[horizontal_start, horizontal_start + horizontal_fov) degrees (from +X toward +Y), a "
-        "partial sweep.");
+        "partial sweep. filter_textures: each point's colour is the texture's mean over its "
+        "footprint (the step times the range), as a scanner's camera pixel records it; else the "
+        "texture at the hit alone.");
 
     m.def(
         "start_simulate_scans",
         [](MeshArg mesh, const std::vector<std::vector<double>>& positions, double step_deg,
            double noise_mm, double vertical_fov, const std::vector<std::uint64_t>& seeds,
-           double horizontal_fov, double horizontal_start) {
+           double horizontal_fov, double horizontal_start, bool filter_textures) {
             if (!seeds.empty() && seeds.size() != positions.size()) {
                 throw InputError("simulated scans: give one seed per scanner position, or none");
             }
@@ -410,7 +416,8 @@ void bind_mesh(py::module_& m) {
             for (std::size_t k = 0; k < positions.size(); ++k) {
                 scanners.push_back(scanner_settings(positions[k], step_deg, noise_mm, vertical_fov,
                                                     seeds.empty() ? k + 1 : seeds[k],
-                                                    horizontal_fov, horizontal_start));
+                                                    horizontal_fov, horizontal_start,
+                                                    filter_textures));
             }
             struct Scanned {
                 PointCloud cloud;
@@ -440,6 +447,7 @@ void bind_mesh(py::module_& m) {
         py::arg("vertical_fov") = 300.0, py::arg("seeds") = std::vector<std::uint64_t>{},
         py::arg("horizontal_fov") = ScannerSettings{}.horizontal_fov_deg,
         py::arg("horizontal_start") = ScannerSettings{}.horizontal_start_deg,
+        py::arg("filter_textures") = ScannerSettings{}.filter_textures,
         "Start simulated scans of `mesh` from each of `positions` (world), as start_simulate_scan "
         "takes them (seeds: one per position; none: 1, 2, ...), into one PointCloud with no file "
         "between: the cloud load_scans gives of their files, but for the positions' 6 decimals. "

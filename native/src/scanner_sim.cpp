@@ -103,6 +103,8 @@ std::vector<SimulatedPoint> simulate_scan(const EmbreeScene& scene, const Scanne
     const Pattern p = pattern_of(settings);
     const glm::dvec3 local_origin = settings.position - scene.mesh().world_offset;
     const double sigma_per_metre = settings.noise_mm * 1e-3 / 10.0;
+    // The footprint's width per metre of range: the angle between neighbouring rays.
+    const double spread = settings.filter_textures ? p.step : 0.0;
     // Row j < elevations: elevation_min + j·step; row `elevations` is the zenith (one ray).
     const int rows = p.elevations + 1;
     std::vector<std::vector<SimulatedPoint>> per_row(static_cast<std::size_t>(rows));
@@ -128,7 +130,7 @@ std::vector<SimulatedPoint> simulate_scan(const EmbreeScene& scene, const Scanne
                                                     std::cos(elevation) * std::sin(azimuth),
                                                     std::sin(elevation));
                 ray.t_max = settings.max_range;
-                const MeshHit h = scene.intersect(ray);
+                const MeshHit h = scene.intersect(ray, spread);
                 if (!h.hit) {
                     continue;
                 }

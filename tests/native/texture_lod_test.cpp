@@ -1,7 +1,8 @@
 // Texture LOD: a ray's sample reads the texture's mean over its footprint. Named cases: a
 // footprint of a texel or less is the plain bilinear sample bit for bit; a footprint as wide as
 // the image reads its mean; odd sizes halve down to one texel; a far checkerboard in the ground
-// truth reads grey with filtered textures and aliases without them; one colour stays one colour.
+// truth reads grey with filtered textures and aliases without them, and so do a simulated
+// scanner's points; one colour stays one colour.
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -12,6 +13,7 @@
 #include "lfprobe/embree_scene.hpp"
 #include "lfprobe/ground_truth.hpp"
 #include "lfprobe/mesh.hpp"
+#include "lfprobe/scanner_sim.hpp"
 #include "lfprobe/texture.hpp"
 
 namespace lfprobe {
@@ -146,6 +148,30 @@ TEST(TextureLod, ARayWithoutSpreadIsTheUnfilteredHitBitForBit) {
     // A wide spread reads towards the checks' mean.
     const MeshHit wide = scene.intersect(ray, 0.05);
     EXPECT_NEAR(wide.base_color.x, 0.5f, 0.05f);
+}
+
+// A scanner's colour comes from a camera whose pixel integrates what it covers: on checks much
+// finer than its step, its points read grey, where point samples read the checks and alias.
+TEST(TextureLod, AScannersPointsOnFineChecksAreGreyWithItsCameraFootprintAndAliasWithout) {
+    const Mesh mesh = checkered_floor(20.0, 78.0f); // 8 mm checks; the footprint is ≥ 2.8 cm
+    const EmbreeScene scene(mesh);
+    ScannerSettings filtered;
+    filtered.position = {0.0, 0.0, 1.6};
+    filtered.step_deg = 1.0;
+    filtered.noise_mm = 0.0;
+    ScannerSettings point = filtered;
+    point.filter_textures = false;
+    const auto grey_of = [&](const ScannerSettings& s) {
+        const std::vector<SimulatedPoint> points = simulate_scan(scene, s);
+        double sum = 0.0;
+        for (const SimulatedPoint& q : points) {
+            sum += std::abs(q.color.x - 0.5);
+        }
+        EXPECT_GT(points.size(), 1000u);
+        return points.empty() ? 1.0 : sum / static_cast<double>(points.size());
+    };
+    EXPECT_LT(grey_of(filtered), 0.05);
+    EXPECT_GT(grey_of(point), 0.3);
 }
 
 } // namespace

@@ -33,6 +33,11 @@ struct ScannerSettings {
     double noise_mm = 2.0;
     std::uint64_t seed = 1;
     double max_range = 1.0e4; // metres; farther hits are not returned, as on a real scanner
+    // A point's colour as a scanner's camera records it: the texture averaged over the point's
+    // footprint (the angular step times the range, texture LOD as the ground truth filters),
+    // since a camera pixel integrates what it covers. False: the texture at the hit alone (a
+    // point sample, which aliases fine texture the way no camera does).
+    bool filter_textures = true;
 };
 
 struct ScanStats {

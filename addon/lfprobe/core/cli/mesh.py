@@ -40,7 +40,8 @@ def _cmd_scan(args) -> int:
         lambda _native: _native.start_simulate_scan(
             args.mesh, args.out, list(args.at), step_deg=args.step_deg, noise_mm=args.noise_mm,
             vertical_fov=args.vertical_fov, seed=args.seed, horizontal_fov=args.horizontal_fov,
-            horizontal_start=args.horizontal_start),
+            horizontal_start=args.horizontal_start,
+            filter_textures=args.texture_filter == "footprint"),
         lambda stats: (f"scan {args.out}: {stats['points']} points from {stats['rays']} rays "
                        f"in {stats['seconds']:.3f} s"),
     )
@@ -75,6 +76,10 @@ def add_parsers(subparsers) -> None:
     scan.add_argument("--horizontal-start", type=finite_float, default=0.0,
                       help="first azimuth of the sweep (degrees, from +X toward +Y)")
     scan.add_argument("--seed", type=int, default=1, help="noise seed")
+    scan.add_argument("--texture-filter", choices=["footprint", "point"], default="footprint",
+                      help="each point's colour: the texture's mean over the point's footprint (the "
+                           "step times the range, as a scanner's camera pixel records it; default) or "
+                           "the texture at the hit alone (point; before 2026-11)")
     scan.add_argument("--out", required=True, help="output .xyz file")
     scan.add_argument("--json", action="store_true", help="print the stats as JSON")
     scan.add_argument("--quiet", action="store_true", help="no progress output")
