@@ -56,6 +56,9 @@ def main() -> int:
     parser.add_argument("--thickness", default="",
                         help="trace thicknesses in metres to render the probes with (comma-separated; "
                              "empty: the renderer's default)")
+    parser.add_argument("--no-peers", action="store_true",
+                        help="skip the splats and the Poisson mesh (Open3D's Poisson takes minutes and "
+                             "many GB beyond 20 M points)")
     args = parser.parse_args()
 
     preset = dataclasses.replace(get_preset("demo"), poisson_depth=args.poisson_depth)
@@ -107,6 +110,8 @@ def main() -> int:
                     method = f"probes {args.resolution}², {100 * thickness:g} cm"
                     print(line(method, view.name, where, figures, 1e3 * stats["seconds"]), flush=True)
         del field
+        if args.no_peers:
+            return 0
         for row in peers.splat_rows(ctx, density)[0]:
             print(line("splats", row["view"], "its eye", row, row["ms_per_frame"]), flush=True)
         rows, _, info = peers.poisson_rows(ctx, density)
