@@ -983,4 +983,20 @@ bool operator==(const KnownSpace& a, const KnownSpace& b) {
            a.surfaces_ == b.surfaces_ && a.seen_ == b.seen_;
 }
 
+void SeenUnion::add(const SeenVoxels* seen) {
+    if (seen == nullptr) {
+        everywhere_ = true;
+    } else {
+        sparse_.merge(*seen);
+    }
+}
+
+void SeenUnion::densify(std::size_t max_bytes) {
+    dense_ = sparse_.dense(max_bytes);
+    is_dense_ = dense_.dims()[0] > 0 || sparse_.voxel_count() == 0;
+    if (is_dense_) {
+        sparse_.drop_voxels(); // its region stays: what lies beyond it counts as seen
+    }
+}
+
 } // namespace lfprobe

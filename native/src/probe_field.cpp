@@ -253,37 +253,14 @@ struct ProbeField::KnownSpaceMasks {
         double footprint_texels;
         KnownSpaceMask mask;
     };
-    // What any probe saw, and per grid cell what its corner probes saw (built once), each
-    // dense where that fits the budget below, else searched.
-    struct Union {
-        SeenVoxels sparse;
-        VoxelMask dense;
-        bool is_dense = false;
-        bool everywhere = false; // a probe the known space does not list: never passed over
-        [[nodiscard]] bool contains(const glm::dvec3& point) const {
-            return everywhere ||
-                   (is_dense ? dense.contains(point) || sparse.beyond_exact_region(point)
-                             : sparse.contains(point));
-        }
-        void add(const SeenVoxels* seen) {
-            if (seen == nullptr) {
-                everywhere = true;
-            } else {
-                sparse.merge(*seen);
-            }
-        }
-        void densify(std::size_t max_bytes) {
-            dense = sparse.dense(max_bytes);
-            is_dense = dense.dims()[0] > 0 || sparse.voxel_count() == 0;
-            if (is_dense) {
-                sparse.drop_voxels(); // its region stays: what lies beyond it counts as seen
-            }
-        }
-    };
+    // What any probe saw, what each probe saw, and per grid cell what its corner probes saw
+    // (built once).
     std::once_flag unions_built;
-    Union any;
-    std::vector<Union> cells;
-    std::vector<Union> probes; // what each probe saw, as a Union of one
+    // Read before every per-ray query: an inline load where call_once is a library call.
+    std::atomic<bool> unions_ready{false};
+    SeenUnion any;
+    std::vector<SeenUnion> cells;
+    std::vector<SeenUnion> probes; // each a union of one
     std::mutex mutex;
     std::vector<std::unique_ptr<Entry>> entries; // never removed: pointers stay valid
     std::atomic<const Entry*> last{nullptr};
@@ -364,44 +341,52 @@ bool ProbeField::seen_by_corners(const GridCell& cell, const glm::dvec3& point) 
 
 void ProbeField::build_seen_unions() const {
     KnownSpaceMasks& masks = *known_space_masks_;
+    if (masks.unions_ready.load(std::memory_order_acquire)) {
+        return;
+    }
     std::call_once(masks.unions_built, [&] {
-        if (known_space_ == nullptr) {
-            return;
+        build_seen_unions_once(masks);
+        masks.unions_ready.store(true, std::memory_order_release);
+    });
+}
+
+void ProbeField::build_seen_unions_once(KnownSpaceMasks& masks) const {
+    if (known_space_ == nullptr) {
+        return;
+    }
+    // Dense unions cost one bit per 10 cm voxel of their box: 128 MiB for the cells
+    // together at most, 32 MiB for the whole set's.
+    constexpr std::size_t kCellsBudget = std::size_t{128} << 20;
+    constexpr std::size_t kProbesBudget = std::size_t{256} << 20;
+    masks.probes.resize(probe_count());
+    for (std::size_t i = 0; i < probe_count(); ++i) {
+        const SeenVoxels* seen = known_space_->seen_by(i);
+        masks.any.add(seen);
+        masks.probes[i].add(seen);
+    }
+    masks.any.densify(std::size_t{32} << 20);
+    tbb::parallel_for(std::size_t{0}, probe_count(), [&](std::size_t i) {
+        masks.probes[i].densify(std::min(kProbesBudget / probe_count(), std::size_t{2} << 20));
+    });
+    if (!is_grid()) {
+        return;
+    }
+    const ProbeGrid& g = grid();
+    std::array<int, 3> cells{};
+    for (std::size_t a = 0; a < 3; ++a) {
+        cells[a] = std::max(g.counts[a] - 1, 1);
+    }
+    masks.cells.resize(static_cast<std::size_t>(cells[0]) * cells[1] * cells[2]);
+    tbb::parallel_for(std::size_t{0}, masks.cells.size(), [&](std::size_t i) {
+        const GridCell cell{static_cast<int>(i % cells[0]),
+                            static_cast<int>((i / cells[0]) % cells[1]),
+                            static_cast<int>(i / (static_cast<std::size_t>(cells[0]) * cells[1]))};
+        std::array<std::size_t, 8> corners{};
+        const std::size_t count = grid_cell_corners(g, cell, corners);
+        for (std::size_t k = 0; k < count; ++k) {
+            masks.cells[i].add(known_space_->seen_by(corners[k]));
         }
-        // Dense unions cost one bit per 10 cm voxel of their box: 128 MiB for the cells
-        // together at most, 32 MiB for the whole set's.
-        constexpr std::size_t kCellsBudget = std::size_t{128} << 20;
-        constexpr std::size_t kProbesBudget = std::size_t{256} << 20;
-        masks.probes.resize(probe_count());
-        for (std::size_t i = 0; i < probe_count(); ++i) {
-            const SeenVoxels* seen = known_space_->seen_by(i);
-            masks.any.add(seen);
-            masks.probes[i].add(seen);
-        }
-        masks.any.densify(std::size_t{32} << 20);
-        tbb::parallel_for(std::size_t{0}, probe_count(), [&](std::size_t i) {
-            masks.probes[i].densify(std::min(kProbesBudget / probe_count(), std::size_t{2} << 20));
-        });
-        if (!is_grid()) {
-            return;
-        }
-        const ProbeGrid& g = grid();
-        std::array<int, 3> cells{};
-        for (std::size_t a = 0; a < 3; ++a) {
-            cells[a] = std::max(g.counts[a] - 1, 1);
-        }
-        masks.cells.resize(static_cast<std::size_t>(cells[0]) * cells[1] * cells[2]);
-        tbb::parallel_for(std::size_t{0}, masks.cells.size(), [&](std::size_t i) {
-            const GridCell cell{
-                static_cast<int>(i % cells[0]), static_cast<int>((i / cells[0]) % cells[1]),
-                static_cast<int>(i / (static_cast<std::size_t>(cells[0]) * cells[1]))};
-            std::array<std::size_t, 8> corners{};
-            const std::size_t count = grid_cell_corners(g, cell, corners);
-            for (std::size_t k = 0; k < count; ++k) {
-                masks.cells[i].add(known_space_->seen_by(corners[k]));
-            }
-            masks.cells[i].densify(kCellsBudget / masks.cells.size());
-        });
+        masks.cells[i].densify(kCellsBudget / masks.cells.size());
     });
 }
 

@@ -129,6 +129,28 @@ private:
     glm::dvec3 exact_high_{0.0};
 };
 
+// What several probes saw together (the union of their SeenVoxels), as a trace asks it per
+// ray: dense (a bit per voxel) where that fits a budget, else the merged blocks searched.
+class SeenUnion {
+public:
+    // Adds one probe's seen voxels; null (a probe the known space does not list) makes the
+    // union hold every point, so that such a probe is never passed over.
+    void add(const SeenVoxels* seen);
+    // Turns the union dense where its box takes at most `max_bytes`.
+    void densify(std::size_t max_bytes);
+    [[nodiscard]] bool contains(const glm::dvec3& point) const {
+        return everywhere_ ||
+               (is_dense_ ? dense_.contains(point) || sparse_.beyond_exact_region(point)
+                          : sparse_.contains(point));
+    }
+
+private:
+    SeenVoxels sparse_;
+    VoxelMask dense_;
+    bool is_dense_ = false;
+    bool everywhere_ = false;
+};
+
 class KnownSpace {
 public:
     // The voxel edge bakes use: fine enough that a trace's dilation (a few centimetres at the

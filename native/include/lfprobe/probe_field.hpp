@@ -211,6 +211,7 @@ private:
     void build_known_space_from_probes();
     [[nodiscard]] bool uses_known_space() const;
     void build_seen_unions() const;
+    void build_seen_unions_once(KnownSpaceMasks& masks) const;
 };
 
 } // namespace lfprobe
