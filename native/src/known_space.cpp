@@ -79,11 +79,6 @@ VoxelMask::VoxelMask(const glm::dvec3& origin, double voxel, const std::array<in
     bits_.assign((count + 63) / 64, 0);
 }
 
-bool VoxelMask::is_set(int x, int y, int z) const {
-    const std::size_t i = index(x, y, z);
-    return (bits_[i >> 6] >> (i & 63)) & 1U;
-}
-
 void VoxelMask::set(int x, int y, int z) {
     const std::size_t i = index(x, y, z);
     bits_[i >> 6] |= std::uint64_t{1} << (i & 63);
@@ -95,21 +90,6 @@ std::size_t VoxelMask::set_count() const {
         count += static_cast<std::size_t>(__builtin_popcountll(word));
     }
     return count;
-}
-
-bool VoxelMask::contains(const glm::dvec3& point) const {
-    if (bits_.empty()) {
-        return false;
-    }
-    std::array<int, 3> cell{};
-    for (int a = 0; a < 3; ++a) {
-        const double u = std::floor((point[a] - origin_[a]) / voxel_);
-        if (!(u >= 0.0 && u < static_cast<double>(dims_[static_cast<std::size_t>(a)]))) {
-            return false;
-        }
-        cell[static_cast<std::size_t>(a)] = static_cast<int>(u);
-    }
-    return is_set(cell[0], cell[1], cell[2]);
 }
 
 double VoxelMask::last_set_t(const Ray& ray, double t_from, double t_to) const {

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -49,10 +50,27 @@ public:
                                                           double t_to) const;
     // A mask `factor` times coarser whose voxel is set where any of its voxels is.
     [[nodiscard]] VoxelMask pooled(int factor) const;
-    // Whether the voxel holding `point` is set (false outside the box).
-    [[nodiscard]] bool contains(const glm::dvec3& point) const;
+    // Whether the voxel holding `point` is set (false outside the box). Inline, as is_set: a
+    // trace asks it for every probe and cell a ray passes, and every voxel its walks cross.
+    [[nodiscard]] bool contains(const glm::dvec3& point) const {
+        if (bits_.empty()) {
+            return false;
+        }
+        std::array<int, 3> cell{};
+        for (int a = 0; a < 3; ++a) {
+            const double u = std::floor((point[a] - origin_[a]) / voxel_);
+            if (!(u >= 0.0 && u < static_cast<double>(dims_[static_cast<std::size_t>(a)]))) {
+                return false;
+            }
+            cell[static_cast<std::size_t>(a)] = static_cast<int>(u);
+        }
+        return is_set(cell[0], cell[1], cell[2]);
+    }
 
-    [[nodiscard]] bool is_set(int x, int y, int z) const;
+    [[nodiscard]] bool is_set(int x, int y, int z) const {
+        const std::size_t i = index(x, y, z);
+        return (bits_[i >> 6] >> (i & 63)) & 1U;
+    }
     void set(int x, int y, int z);
     [[nodiscard]] const std::array<int, 3>& dims() const { return dims_; }
     [[nodiscard]] double voxel() const { return voxel_; }
