@@ -67,7 +67,9 @@ def _introduction_section(page, data: Dict[str, object]) -> None:
         f"{m['platform']}, Python {m['python']}. Every figure below was measured in this run.")
     page.paragraph("Scans: " + "; ".join(f"{d['step_deg']:g}° step → {d['points']:,} points "
                                          f"({d['scan_seconds']:.2f} s)" for d in data["densities"])
-                   + f" from {len(scene['scanners'])} scanner(s). Probe grid {scene['grid']['counts']} from "
+                   + f" from {len(scene['scanners'])} scanner(s), range noise σ {scene['scan']['noise_mm']:g} mm at 10 m; each "
+                   "point's colour is the texture's mean over its footprint (the step times the range), as a "
+                   f"scanner's camera records it. Probe grid {scene['grid']['counts']} from "
                    f"{scene['grid']['min']} to {scene['grid']['max']}.", "note")
 
 
