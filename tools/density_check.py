@@ -11,12 +11,18 @@ usage: /usr/bin/python3 tools/density_check.py [--step-deg 0.1] [--resolution 20
            [--poisson-depth 10] [--distances 0.4,0.8] [--scene blend/lab_room/lab_room.scene.json]
            [--probes DIR]   (bake into DIR and keep it, or reuse the set already there)
            [--thickness 0.01,0.0025]   (render the probes at each trace thickness)
+           [--no-peers]   (the probes alone)
+           [--texel-check]   (each view's nearest grid probe against a mesh-baked probe at the
+                              same place, texel by texel; also against a probe baked from one
+                              scan taken at that place at half its texel angle: what the bake
+                              makes of ideal data, apart from where the scanners stood)
 
 At 0.1° the lab room's four scans hold 21.6 M points; the run takes about 5 minutes and 3 GB
 on 2 cores (probes 2048²: 30 × 77 MiB in memory; Poisson depth 10: 2 minutes).
 """
 import argparse
 import dataclasses
+import json
 import math
 import os
 import shutil
@@ -27,7 +33,8 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "addon"))
 
-from lfprobe.core.pipeline import BakeOptions, ProbePlacementSpec, bake_from_cloud  # noqa: E402
+from lfprobe.core import metrics  # noqa: E402
+from lfprobe.core.pipeline import BakeOptions, ProbePlacementSpec, bake_from_cloud, bake_from_mesh  # noqa: E402
 from lfprobe.core.report import peers  # noqa: E402
 from lfprobe.core.report.measure import RunContext, measure  # noqa: E402
 from lfprobe.core.report.presets import DEFAULT_TRACE, get_preset  # noqa: E402
@@ -44,6 +51,57 @@ def line(method: str, view: str, where: str, figures: dict, ms: float) -> str:
             f"holes {100 * figures['hole_rate']:5.2f} %  {ms:7.0f} ms")
 
 
+def texel_figures(test: dict, reference: dict) -> str:
+    """Probe `test` against `reference` (read_probe dicts at one resolution), texel by texel: the
+    share of texels on the same surface (distance within 2 %), the sRGB PSNR over those, and
+    over those at least 3 texels from any other (away from silhouettes)."""
+    import numpy as np
+    from scipy.ndimage import binary_erosion
+    n = int(reference["resolution"])
+    def srgb(probe):
+        return metrics.srgb_encode(np.clip(np.asarray(probe["rgba"], np.float64).reshape(n, n, -1)[..., :3], 0, 1))
+    d_ref = np.asarray(reference["distance"], np.float64).reshape(n, n)
+    d_test = np.asarray(test["distance"], np.float64).reshape(n, n)
+    with np.errstate(invalid="ignore"):
+        same = np.isfinite(d_ref) & np.isfinite(d_test) & (np.abs(d_test - d_ref) <= 0.02 * d_ref)
+    inner = binary_erosion(same, iterations=3)
+    squared = ((srgb(test) - srgb(reference)) ** 2).mean(axis=-1)
+    def psnr(mask):
+        return 10 * math.log10(1 / squared[mask].mean()) if mask.any() else float("nan")
+    return (f"same surface {100 * same.mean():5.1f} % of texels, PSNR there {psnr(same):5.2f} dB, "
+            f"away from their edges {psnr(inner):5.2f} dB")
+
+
+def texel_check(ctx, folder: str, anchors: list, resolution: int, scan: dict, work: str) -> None:
+    """--texel-check: each anchor's grid probe against a mesh-baked probe there, and the same
+    for a probe baked from one scan taken there at half the probe's texel angle."""
+    manifest = json.loads(Path(folder, "manifest.json").read_text())
+    offset = manifest.get("world_offset", [0.0, 0.0, 0.0])
+    step = math.degrees(math.sqrt(4 * math.pi) / resolution) / 2
+    for name, anchor in anchors:
+        entry = min(manifest["probes"],
+                    key=lambda p: math.dist([c + o for c, o in zip(p["position"], offset)], anchor))
+        grid_probe = ctx.native.read_probe(os.path.join(folder, entry["file"]))
+        mesh_dir = os.path.join(work, f"texel_mesh_{name}")
+        bake_from_mesh([ctx.scene.mesh], mesh_dir, ProbePlacementSpec(positions=[anchor]),
+                       BakeOptions(resolution=resolution))
+        mesh_probe = ctx.native.read_probe(os.path.join(mesh_dir, "probe_00000.exr"))
+        print(f"texels {name:15s} grid probe at {tuple(round(c, 2) for c in anchor)} vs mesh-baked: "
+              f"{texel_figures(grid_probe, mesh_probe)}", flush=True)
+        scanned = ctx.native.start_simulate_scans(
+            ctx.mesh, [list(anchor)], step_deg=step, noise_mm=scan["noise_mm"],
+            vertical_fov=scan["vertical_fov"], seeds=[1]).run()
+        ideal_dir = os.path.join(work, f"texel_ideal_{name}")
+        bake_from_cloud(scanned["cloud"], ideal_dir, ProbePlacementSpec(positions=[anchor]),
+                        BakeOptions(resolution=resolution))
+        del scanned
+        ideal = ctx.native.read_probe(os.path.join(ideal_dir, "probe_00000.exr"))
+        print(f"texels {name:15s} one {step:.3f}° scan from there vs mesh-baked:  "
+              f"{texel_figures(ideal, mesh_probe)}", flush=True)
+        shutil.rmtree(mesh_dir, ignore_errors=True)
+        shutil.rmtree(ideal_dir, ignore_errors=True)
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--scene", default=str(ROOT / "blend" / "lab_room" / "lab_room.scene.json"))
@@ -56,6 +114,10 @@ def main() -> int:
     parser.add_argument("--thickness", default="",
                         help="trace thicknesses in metres to render the probes with (comma-separated; "
                              "empty: the renderer's default)")
+    parser.add_argument("--texel-check", action="store_true",
+                        help="each view's nearest grid probe against a mesh-baked probe at the same place, "
+                             "texel by texel, and a probe baked from one scan taken there at half the "
+                             "texel angle against it too")
     parser.add_argument("--no-peers", action="store_true",
                         help="skip the splats and the Poisson mesh (Open3D's Poisson takes minutes and "
                              "many GB beyond 20 M points)")
@@ -110,6 +172,12 @@ def main() -> int:
                     method = f"probes {args.resolution}², {100 * thickness:g} cm"
                     print(line(method, view.name, where, figures, 1e3 * stats["seconds"]), flush=True)
         del field
+        if args.texel_check:
+            anchors = {}
+            for view in ctx.views:
+                anchors.setdefault(tuple(min(positions, key=lambda q: math.dist(q, view.position))), view.name)
+            texel_check(ctx, folder, [(name, list(a)) for a, name in anchors.items()], args.resolution,
+                        scene.scan, work)
         if args.no_peers:
             return 0
         for row in peers.splat_rows(ctx, density)[0]:
