@@ -884,9 +884,7 @@ KnownSpaceMask KnownSpace::mask(double margin, double footprint_texels, int max_
             }
             for (int z = from[2]; z <= to[2]; ++z) {
                 for (int y = from[1]; y <= to[1]; ++y) {
-                    for (int x = from[0]; x <= to[0]; ++x) {
-                        masks.surfaces.set(x, y, z);
-                    }
+                    masks.surfaces.set_run(from[0], to[0], y, z);
                 }
             }
         }

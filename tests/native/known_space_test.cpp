@@ -2,11 +2,13 @@
 // seen voxels hold every point a probe saw free, the surface walk finds the last surface voxel
 // along a ray, a rebuild is bit-identical, the file round-trips and refuses damage, and a field
 // that stops asking where no probe can answer gives every ray the answer of asking on.
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -51,6 +53,30 @@ std::vector<ProbeMap> partial_grid_probes(const BoxRoomScene& room, const ProbeP
 }
 
 } // namespace
+
+// A row's run set a word at a time sets exactly the voxels one at a time would, across word
+// boundaries and within one word.
+TEST(KnownSpace, ARunOfVoxelsSetsTheSameBitsAsOneAtATime) {
+    const std::array<int, 3> dims{150, 3, 2};
+    for (const auto& [x0, x1] : std::vector<std::pair<int, int>>{
+             {0, 0}, {0, 149}, {5, 9}, {60, 70}, {63, 64}, {64, 127}, {1, 148}, {127, 128}}) {
+        VoxelMask runs(glm::dvec3(0.0), 0.1, dims);
+        VoxelMask single(glm::dvec3(0.0), 0.1, dims);
+        runs.set_run(x0, x1, 1, 1);
+        for (int x = x0; x <= x1; ++x) {
+            single.set(x, 1, 1);
+        }
+        EXPECT_EQ(runs.set_count(), static_cast<std::size_t>(x1 - x0 + 1));
+        for (int z = 0; z < dims[2]; ++z) {
+            for (int y = 0; y < dims[1]; ++y) {
+                for (int x = 0; x < dims[0]; ++x) {
+                    ASSERT_EQ(runs.is_set(x, y, z), single.is_set(x, y, z))
+                        << "run " << x0 << ".." << x1 << " at " << x << " " << y << " " << z;
+                }
+            }
+        }
+    }
+}
 
 TEST(KnownSpace, SeenVoxelsHoldEveryPointTheProbeSawFree) {
     const BoxRoomScene room = BoxRoomScene{};

@@ -72,6 +72,18 @@ public:
         return (bits_[i >> 6] >> (i & 63)) & 1U;
     }
     void set(int x, int y, int z);
+    // Sets voxels x0..x1 (inclusive) of row (y, z): a word at a time, where a voxel at a time
+    // was most of a mask's build (the first frame's).
+    void set_run(int x0, int x1, int y, int z) {
+        const std::size_t first = index(x0, y, z);
+        const std::size_t last = index(x1, y, z);
+        for (std::size_t w = first >> 6; w <= last >> 6; ++w) {
+            const std::size_t lo = w == first >> 6 ? first & 63 : 0;
+            const std::size_t hi = w == last >> 6 ? last & 63 : 63;
+            const std::uint64_t upto = hi == 63 ? ~std::uint64_t{0} : (std::uint64_t{2} << hi) - 1;
+            bits_[w] |= upto & ~((std::uint64_t{1} << lo) - 1);
+        }
+    }
     [[nodiscard]] const std::array<int, 3>& dims() const { return dims_; }
     [[nodiscard]] double voxel() const { return voxel_; }
     [[nodiscard]] std::size_t set_count() const;
