@@ -72,8 +72,7 @@ struct FieldQuery {
         if (checking()) {
             // A probe that saw neither free space nor a surface where the ray now starts would
             // answer UNKNOWN there: not asked (known_space.hpp).
-            const glm::dvec3 from = ray.at(std::max(ray.t_min, result.free_until));
-            if (!field.saw_free(index, from) && !known->surfaces.contains(from)) {
+            if (!start_near_surface() && !field.saw_free(index, start())) {
                 return false;
             }
         }
@@ -140,10 +139,9 @@ struct FieldQuery {
         if (!checking()) {
             return false;
         }
-        const glm::dvec3 from = ray.at(std::max(ray.t_min, result.free_until));
         if (result.free_until != checked_from) {
             checked_from = result.free_until; // stuck rays ask again from the same point
-            if (!field.seen_by_any(from) && !known->surfaces.contains(from)) {
+            if (!start_near_surface() && !field.seen_by_any(start())) {
                 return true; // no probe saw where the ray now starts, nor a surface there
             }
         }
@@ -160,11 +158,32 @@ struct FieldQuery {
     // complete scan are answered by the first probe asked, and pay nothing for it.
     [[nodiscard]] bool checking() const { return known != nullptr && result.probes_tried > 0; }
 
+    // Where the ray now starts, and whether a surface voxel holds that point: asked for every
+    // cell and probe until the ray moves on, so found once per start.
+    [[nodiscard]] const glm::dvec3& start() {
+        update_start();
+        return start_point;
+    }
+    [[nodiscard]] bool start_near_surface() {
+        update_start();
+        return start_in_surface;
+    }
+    void update_start() {
+        if (result.free_until != start_t) {
+            start_t = result.free_until;
+            start_point = ray.at(std::max(ray.t_min, result.free_until));
+            start_in_surface = known->surfaces.contains(start_point);
+        }
+    }
+
     ProbeTraceResult fallback;
     std::size_t fallback_probe = 0;
     int max_probes = 0;
     const KnownSpaceMask* known = nullptr;
     double checked_from = std::numeric_limits<double>::quiet_NaN();
+    double start_t = std::numeric_limits<double>::quiet_NaN(); // update_start's free_until
+    glm::dvec3 start_point{0.0};
+    bool start_in_surface = false;
     // The last t along the ray in a surface voxel (-inf: none); NaN until first needed.
     double last_surface_t = std::numeric_limits<double>::quiet_NaN();
 };
@@ -768,8 +787,7 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
             if (query.checking()) {
                 // A cell none of whose corners saw where the ray now starts, with no surface
                 // there: each of them would be passed over (FieldQuery::ask).
-                const glm::dvec3 from = ray.at(std::max(ray.t_min, query.result.free_until));
-                if (!seen_by_corners(span->cell, from) && !query.known->surfaces.contains(from)) {
+                if (!query.start_near_surface() && !seen_by_corners(span->cell, query.start())) {
                     continue;
                 }
             }
