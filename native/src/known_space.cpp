@@ -14,45 +14,21 @@
 #include <tbb/parallel_invoke.h>
 #include <tbb/parallel_sort.h>
 
+#include "known_space_bytes.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/octahedral.hpp"
 #include "lfprobe/probe_exr.hpp"
 
 namespace lfprobe {
 
+using namespace known_space_bytes;
+
 namespace {
 
 constexpr char kMagic[8] = {'L', 'F', 'P', 'K', 'N', 'O', 'W', 'N'};
+constexpr char kDirectionsMagic[8] = {'D', 'I', 'R', 'E', 'C', 'T', 'N', 'S'};
 // Voxel indices stay well inside int32 and a dense mask's arithmetic.
 constexpr double kMaxVoxelIndex = 1 << 28;
-
-template <typename T>
-void put(std::string& out, const T& value) {
-    out.append(reinterpret_cast<const char*>(&value), sizeof(T));
-}
-
-template <typename T>
-T take(const std::string& in, std::size_t& at, const std::string& path) {
-    if (at + sizeof(T) > in.size()) {
-        throw InputError(path + ": the known-space file ends early (byte " + std::to_string(at) +
-                         " of " + std::to_string(in.size()) + ")");
-    }
-    T value;
-    std::memcpy(&value, in.data() + at, sizeof(T));
-    at += sizeof(T);
-    return value;
-}
-
-// A record count, checked against the bytes left for records of `record_bytes` each.
-std::uint64_t take_count(const std::string& in, std::size_t& at, const std::string& path,
-                         std::size_t record_bytes, const char* what) {
-    const auto count = take<std::uint64_t>(in, at, path);
-    if (count > (in.size() - at) / record_bytes) {
-        throw InputError(path + ": the known-space file says " + std::to_string(count) + " " +
-                         what + " but is shorter");
-    }
-    return count;
-}
 
 // A voxel or block index, each coordinate within `limit`.
 std::array<std::int32_t, 3> take_index(const std::string& in, std::size_t& at,
@@ -424,13 +400,23 @@ const SeenVoxels* KnownSpace::seen_by(std::size_t index) const {
     return found != seen_.end() && found->first == index ? &found->second : nullptr;
 }
 
+const SeenDirections* KnownSpace::directions_of(std::size_t index) const {
+    const auto found =
+        std::lower_bound(directions_.begin(), directions_.end(), static_cast<std::uint64_t>(index),
+                         [](const auto& entry, std::uint64_t i) { return entry.first < i; });
+    return found != directions_.end() && found->first == index ? &found->second : nullptr;
+}
+
 KnownSpace KnownSpace::as_probe(std::size_t index) const {
-    if (seen_.size() != 1) {
+    if (seen_.size() != 1 || directions_.size() > 1) {
         throw InputError("known space: " + std::to_string(seen_.size()) +
                          " probes where one was expected");
     }
     KnownSpace moved = *this;
     moved.seen_.front().first = index;
+    if (!moved.directions_.empty()) {
+        moved.directions_.front().first = index;
+    }
     return moved;
 }
 
@@ -519,13 +505,15 @@ void KnownSpace::add_probe(const ProbeMap& map, std::size_t index) {
         std::vector<SurfaceVoxel>().swap(row);
     }
     SeenVoxels seen;
+    SeenDirections directions;
     tbb::parallel_invoke(
         [&] { tbb::parallel_sort(probe.surfaces_.begin(), probe.surfaces_.end(), surface_order); },
-        [&] { seen = SeenVoxels(map); });
+        [&] { seen = SeenVoxels(map); }, [&] { directions = SeenDirections(map); });
     probe.surfaces_.erase(
         std::unique(probe.surfaces_.begin(), probe.surfaces_.end(), same_surface_voxel),
         probe.surfaces_.end());
     probe.seen_.emplace_back(index, std::move(seen));
+    probe.directions_.emplace_back(index, std::move(directions));
     merge(probe);
 }
 
@@ -782,6 +770,29 @@ std::size_t SeenVoxels::voxel_count() const {
     return count;
 }
 
+namespace {
+
+// Two lists of per-probe records, each sorted by probe index, as one; a probe in both was added
+// twice.
+template <typename Record>
+std::vector<std::pair<std::uint64_t, Record>>
+merged_by_probe(const std::vector<std::pair<std::uint64_t, Record>>& a,
+                const std::vector<std::pair<std::uint64_t, Record>>& b) {
+    std::vector<std::pair<std::uint64_t, Record>> merged;
+    merged.reserve(a.size() + b.size());
+    std::merge(a.begin(), a.end(), b.begin(), b.end(), std::back_inserter(merged),
+               [](const auto& x, const auto& y) { return x.first < y.first; });
+    for (std::size_t i = 1; i < merged.size(); ++i) {
+        if (merged[i].first == merged[i - 1].first) {
+            throw InputError("known space: probe " + std::to_string(merged[i].first) +
+                             " was added twice");
+        }
+    }
+    return merged;
+}
+
+} // namespace
+
 void KnownSpace::merge(const KnownSpace& other) {
     has_empty_ = has_empty_ || other.has_empty_;
     farthest_ = std::max(farthest_, other.farthest_);
@@ -792,18 +803,8 @@ void KnownSpace::merge(const KnownSpace& other) {
     surfaces.erase(std::unique(surfaces.begin(), surfaces.end(), same_surface_voxel),
                    surfaces.end());
     surfaces_ = std::move(surfaces);
-    std::vector<std::pair<std::uint64_t, SeenVoxels>> seen;
-    seen.reserve(seen_.size() + other.seen_.size());
-    std::merge(seen_.begin(), seen_.end(), other.seen_.begin(), other.seen_.end(),
-               std::back_inserter(seen),
-               [](const auto& a, const auto& b) { return a.first < b.first; });
-    for (std::size_t i = 1; i < seen.size(); ++i) {
-        if (seen[i].first == seen[i - 1].first) {
-            throw InputError("known space: probe " + std::to_string(seen[i].first) +
-                             " was added twice");
-        }
-    }
-    seen_ = std::move(seen);
+    seen_ = merged_by_probe(seen_, other.seen_);
+    directions_ = merged_by_probe(directions_, other.directions_);
 }
 
 void KnownSpace::normalise() {
@@ -909,6 +910,13 @@ void KnownSpace::write(const std::string& path) const {
         put(out, index);
         seen.write_to(out);
     }
+    // A section files written before it lack (they read without it).
+    out.append(kDirectionsMagic, sizeof(kDirectionsMagic));
+    put(out, static_cast<std::uint64_t>(directions_.size()));
+    for (const auto& [index, directions] : directions_) {
+        put(out, index);
+        directions.write_to(out);
+    }
     write_file_atomically(path, out);
 }
 
@@ -948,6 +956,21 @@ KnownSpace KnownSpace::read(const std::string& path) {
         }
         space.seen_.emplace_back(index, SeenVoxels::read_from(bytes, at, path));
     }
+    if (bytes.size() - at >= sizeof(kDirectionsMagic) &&
+        std::memcmp(bytes.data() + at, kDirectionsMagic, sizeof(kDirectionsMagic)) == 0) {
+        at += sizeof(kDirectionsMagic);
+        // A probe's record: its index, its resolution and one word of bits at least.
+        constexpr std::size_t kDirectionBytes = 8 + 4 + 8;
+        const std::uint64_t count = take_count(bytes, at, path, kDirectionBytes, "probes");
+        for (std::uint64_t i = 0; i < count; ++i) {
+            const auto index = take<std::uint64_t>(bytes, at, path);
+            if (!space.directions_.empty() && index <= space.directions_.back().first) {
+                throw InputError(path + ": the probes' directions in the known-space file are "
+                                        "out of order");
+            }
+            space.directions_.emplace_back(index, SeenDirections::read_from(bytes, at, path));
+        }
+    }
     if (at != bytes.size()) {
         throw InputError(path + ": " + std::to_string(bytes.size() - at) +
                          " bytes follow the known-space file's end");
@@ -958,7 +981,7 @@ KnownSpace KnownSpace::read(const std::string& path) {
 
 bool operator==(const KnownSpace& a, const KnownSpace& b) {
     return a.has_empty_ == b.has_empty_ && a.farthest_ == b.farthest_ &&
-           a.surfaces_ == b.surfaces_ && a.seen_ == b.seen_;
+           a.surfaces_ == b.surfaces_ && a.seen_ == b.seen_ && a.directions_ == b.directions_;
 }
 
 void SeenUnion::add(const SeenVoxels* seen) {

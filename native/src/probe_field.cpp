@@ -15,6 +15,7 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/grid_walk.hpp"
 #include "lfprobe/probe_blend.hpp"
+#include "lfprobe/probe_storage.hpp"
 
 namespace lfprobe {
 
@@ -78,6 +79,11 @@ struct FieldQuery {
         }
         Ray local = ray;
         local.t_min = std::max(ray.t_min, result.free_until);
+        // Its trace would stop at its first texel, UNKNOWN, proving nothing: not asked (nor
+        // read). Judged the same for every ray whether the probe is in memory or not.
+        if (known != nullptr && field.passes_over(index, local, settings)) {
+            return false;
+        }
         const ProbeTraceResult r = field.trace_one(index, local, settings);
         result.steps += r.steps();
         ++result.probes_tried;
@@ -339,6 +345,21 @@ bool ProbeField::saw_free(std::size_t i, const glm::dvec3& point) const {
     build_seen_unions();
     const auto& probes = known_space_masks_->probes;
     return i >= probes.size() || probes[i].contains(point);
+}
+
+bool ProbeField::passes_over(std::size_t i, const Ray& ray, const TraceSettings& settings) const {
+    const SeenDirections* directions =
+        known_space_ != nullptr ? known_space_->directions_of(i) : nullptr;
+    if (directions == nullptr || directions->resolution() != probe_resolution(i)) {
+        return false;
+    }
+    // A packed probe's distances load up to a step off, its own step when coarser (pack_probe).
+    const double step = storage().distance_step;
+    const double slack =
+        step > 0.0 ? std::max(step, known_space_->farthest_distance() / kLargestDistanceCode) : 0.0;
+    Ray local = ray;
+    local.origin = ray.origin - probe_position(i);
+    return directions->dismisses(local, settings, slack);
 }
 
 bool ProbeField::seen_by_any(const glm::dvec3& point) const {

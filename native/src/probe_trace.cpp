@@ -14,6 +14,7 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/probe_lookup.hpp"
 #include "octant_walk.hpp"
+#include "start_dismissal.hpp"
 #include "texel_verdict.hpp"
 
 namespace lfprobe {
@@ -434,43 +435,22 @@ double surface_thickness(const TraceSettings& settings, double distance, int n) 
 
 namespace {
 
-// A probe that never saw where the ray starts answers UNKNOWN there, whatever lies beyond: the
-// walk's first texel is the one around the direction to the start, and an unknown texel stops
-// it, as does a surface the start lies behind (beyond the fallback's reach, so that no fallback
-// is kept). In a partial scan most probes a ray asks are such probes, and this answer costs nine
-// texel reads instead of the walk's set-up and its descent through every coarse level. The
-// texels around are read too, so that the texel the walk's own arithmetic picks at an edge or
-// across an octant's fold is unknown as well; a start near the probe centre (where the walk
-// skips the ball the probe stood in) is left to the walk. The answer is the walk's: UNKNOWN,
-// proven free up to the start.
-std::optional<ProbeTraceResult>
-dismiss_if_unknown_at_start(const ProbeMap& map, const glm::dvec3& o, const glm::dvec3& d,
-                            double t_lo, double t_hi, const TraceSettings& settings) {
-    if (!settings.dismiss_unknown_start || !(t_hi > t_lo) || !std::isfinite(t_lo)) {
-        return std::nullopt;
-    }
-    const glm::dvec3 start = o + t_lo * d;
-    const double length = glm::length(start);
-    if (!(length > 2.0 * settings.eye_at_probe_distance) || !std::isfinite(length)) {
-        return std::nullopt;
-    }
+// A probe that never saw where the ray starts answers UNKNOWN there, whatever lies beyond
+// (start_dismissal.hpp). In a partial scan most probes a ray asks are such probes, and this
+// answer costs nine texel reads instead of the walk's set-up and its descent through every
+// coarse level. The answer is the walk's: UNKNOWN, proven free up to the start.
+std::optional<ProbeTraceResult> dismiss_if_unknown_at_start(const ProbeMap& map, const Ray& ray,
+                                                            const TraceSettings& settings) {
     const int n = map.resolution;
-    const oct::Texel home = oct::texel_of_direction(glm::vec3(start / length), n);
-    // Behind a surface by more than the fallback's reach stops the walk at its first texel too
-    // (passing behind, or meeting the surface's back face), with no fallback kept.
-    const double reach = std::max(settings.thickness, settings.fallback_thickness);
-    const double reach_per_metre = thickness_per_metre(settings, n);
-    for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-            const oct::Texel t = oct::wrap_texel(home.x + dx, home.y + dy, n);
-            const auto r = static_cast<double>(map.distance_at(oct::texel_index(t, n)));
-            if (!std::isnan(r) && !(length > r + reach + reach_per_metre * r)) {
-                return std::nullopt;
-            }
-        }
+    const std::optional<start_dismissal::Start> start =
+        start_dismissal::dismissible_start(ray, n, settings);
+    if (!start || !start_dismissal::stops_at_first_texel(*start, n, settings, [&](oct::Texel t) {
+            return static_cast<double>(map.distance_at(oct::texel_index(t, n)));
+        })) {
+        return std::nullopt;
     }
     ProbeTraceResult result;
-    set_unknown(result, home, t_lo);
+    set_unknown(result, start->home, start->t_lo);
     result.fine_steps = 1; // the texel that stopped it, as the walk counts it; no descent
     return result;
 }
@@ -489,7 +469,7 @@ ProbeTraceResult trace_probe(const ProbeMap& map, const MinDistancePyramid* leve
     const double t_lo = ray.t_min;
     const double t_hi = ray.t_max;
     if (std::optional<ProbeTraceResult> dismissed =
-            dismiss_if_unknown_at_start(map, o, d, t_lo, t_hi, settings)) {
+            dismiss_if_unknown_at_start(map, ray, settings)) {
         return *dismissed;
     }
     Tracer tracer(map, levels, o, d, settings);

@@ -16,8 +16,12 @@
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/known_space.hpp"
+#include "lfprobe/min_distance_pyramid.hpp"
 #include "lfprobe/probe_field.hpp"
 #include "lfprobe/probe_set.hpp"
+#include "lfprobe/probe_storage.hpp"
+#include "lfprobe/probe_trace.hpp"
+#include "lfprobe/seen_directions.hpp"
 #include "temp_folder.hpp"
 #include "trace_scenes.hpp"
 
@@ -193,6 +197,74 @@ TEST(KnownSpace, ARebuildInAnyOrderIsBitIdenticalAndTheFileRoundTrips) {
     }
 }
 
+// A probe's known directions (a bit per texel, the farthest distance per block) pass a ray over
+// only where the probe's own trace stops at its first texel, UNKNOWN, proving nothing: at full
+// precision and packed (its distances read a step off), from starts inside and outside the
+// room; and they catch most of those rays, which a one-station scan sends to most probes.
+TEST(KnownSpace, KnownDirectionsPassARayOverOnlyWhereTheProbesTraceStopsAtItsStart) {
+    const BoxRoomScene room = BoxRoomScene{};
+    const glm::dvec3 centre(0.3, -0.2, 1.2);
+    for (const double step : {0.0, 0.004}) {
+        ProbeMap map = partial_probe(room, centre, 96);
+        const SeenDirections directions(map); // from the map as baked, before any packing
+        ProbeStorage storage;
+        storage.distance_step = step;
+        double slack = 0.0;
+        if (step > 0.0) {
+            (void)pack_probe(map, storage);
+            slack = map.packed.distance_step;
+        }
+        const MinDistancePyramid levels(decoded_distances(map), map.resolution);
+        std::mt19937 rng(11);
+        std::uniform_real_distribution<double> u(-1.0, 1.0);
+        std::size_t stopped = 0;
+        std::size_t passed_over = 0;
+        for (int i = 0; i < 20000; ++i) {
+            Ray ray;
+            ray.origin = glm::dvec3(2.5 * u(rng), 2.0 * u(rng), 1.5 + 2.0 * u(rng)) - centre;
+            ray.direction = glm::normalize(glm::dvec3(u(rng), u(rng), u(rng)));
+            ray.t_min = 0.5 * (u(rng) + 1.0);
+            const TraceSettings settings;
+            const ProbeTraceResult r = trace_probe(map, &levels, ray, settings);
+            const bool stops_at_start = r.status == TraceStatus::Unknown &&
+                                        r.free_until == ray.t_min && !r.has_fallback &&
+                                        r.steps() == 1;
+            stopped += stops_at_start ? 1 : 0;
+            if (directions.dismisses(ray, settings, slack)) {
+                ++passed_over;
+                ASSERT_TRUE(stops_at_start) << "step " << step << ", ray " << i;
+            }
+        }
+        std::printf("step %.3f: %zu rays stop at their start, %zu of them passed over\n", step,
+                    stopped, passed_over);
+        EXPECT_GT(stopped, 5000u);
+        EXPECT_GT(passed_over, stopped * 3 / 4);
+    }
+}
+
+// A file written before the probes' directions were kept reads as it did: the same surfaces and
+// seen voxels, no directions (a trace then asks such probes).
+TEST(KnownSpace, AFileWithoutTheProbesDirectionsStillReads) {
+    const BoxRoomScene room = BoxRoomScene{};
+    KnownSpace space;
+    space.add_probe(partial_probe(room, {0.3, -0.2, 1.2}, 32), 0);
+    space.add_probe(partial_probe(room, {-0.3, 0.2, 1.2}, 32), 1);
+    ASSERT_NE(space.directions_of(1), nullptr);
+    EXPECT_EQ(space.directions_of(2), nullptr);
+    const std::filesystem::path folder = scenes::fresh_dir("known_space", "old_file");
+    const std::string path = (folder / kKnownSpaceName).string();
+    space.write(path);
+    const std::string bytes = scenes::file_bytes(path);
+    const std::size_t section = bytes.rfind("DIRECTNS");
+    ASSERT_NE(section, std::string::npos);
+    scenes::write_file(path, bytes.substr(0, section));
+    const KnownSpace old = KnownSpace::read(path);
+    EXPECT_EQ(old.directions_of(0), nullptr);
+    ASSERT_NE(old.seen_by(1), nullptr);
+    EXPECT_TRUE(*old.seen_by(1) == *space.seen_by(1));
+    EXPECT_EQ(old.surface_voxel_count(), space.surface_voxel_count());
+}
+
 TEST(Grid, RaysNoProbeCanAnswerStopEarlyWithTheAnswersOfAskingOn) {
     // A grid most of whose probes saw half the room: rays into the unseen half end UNKNOWN
     // after fewer probes, and every ray's answer is the one asking on gives.
@@ -267,9 +339,9 @@ TEST(Grid, ABakedSetCarriesItsKnownSpaceAndALazyOpenUsesItWithoutReadingProbes) 
     ASSERT_NE(lazy.known_space(), nullptr);
     EXPECT_EQ(lazy.loaded_probe_count(), 0u);
     // A ray that starts 1 m above the ceiling, where no probe saw anything (and beyond the
-    // surfaces' reach, a few footprints of these 64² probes): the first probe asked
-    // answers UNKNOWN there, and no other is asked (or read); asking on, every probe the walk
-    // reaches is read and answers the same.
+    // surfaces' reach, a few footprints of these 64² probes): the known directions show that
+    // the first probe would answer UNKNOWN there, so it is not asked (or read), and the known
+    // space ends the ray; asking on, every probe the walk reaches is read and answers the same.
     Ray ray;
     ray.origin = glm::dvec3(0.1, 0.1, 3.5);
     ray.direction = glm::dvec3(0.0, 0.0, -1.0);
@@ -278,8 +350,8 @@ TEST(Grid, ABakedSetCarriesItsKnownSpaceAndALazyOpenUsesItWithoutReadingProbes) 
     ask_on.stop_where_no_probe_can_answer = false;
     const FieldTraceResult stopped = lazy.trace(ray);
     EXPECT_EQ(stopped.status, TraceStatus::Unknown);
-    EXPECT_EQ(stopped.probes_tried, 1u);
-    EXPECT_EQ(lazy.loaded_probe_count(), 1u);
+    EXPECT_EQ(stopped.probes_tried, 0u);
+    EXPECT_EQ(lazy.loaded_probe_count(), 0u);
     const FieldTraceResult full = lazy.trace(ray, ask_on);
     EXPECT_EQ(full.status, TraceStatus::Unknown);
     EXPECT_GT(full.probes_tried, 1u);

@@ -30,6 +30,7 @@
 
 #include "lfprobe/probe_map.hpp"
 #include "lfprobe/ray.hpp"
+#include "lfprobe/seen_directions.hpp"
 
 namespace lfprobe {
 
@@ -200,6 +201,9 @@ public:
     [[nodiscard]] KnownSpace as_probe(std::size_t index) const;
     // What probe `index` saw free; null when it was not added.
     [[nodiscard]] const SeenVoxels* seen_by(std::size_t index) const;
+    // The directions probe `index` knows; null when it was not added, or the file was written
+    // before they were kept.
+    [[nodiscard]] const SeenDirections* directions_of(std::size_t index) const;
     [[nodiscard]] std::size_t probes_added() const { return seen_.size(); }
 
     // Whether any probe added has an empty texel (a MISS is possible): then the known space
@@ -236,6 +240,7 @@ private:
     double farthest_ = 0.0;
     std::vector<SurfaceVoxel> surfaces_;                     // sorted by (z, y, x), one per voxel
     std::vector<std::pair<std::uint64_t, SeenVoxels>> seen_; // by probe index
+    std::vector<std::pair<std::uint64_t, SeenDirections>> directions_; // by probe index
 };
 
 // Adds the known space of the one-probe set in `probe_folder` to the set in `set_folder` as its

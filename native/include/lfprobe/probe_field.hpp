@@ -147,6 +147,11 @@ public:
     // Whether probe i may have seen `point` (local frame) free: false only where its known
     // space says it did not (known_space.hpp's SeenVoxels); never reads the probe.
     [[nodiscard]] bool saw_free(std::size_t i, const glm::dvec3& point) const;
+    // Whether probe i's trace would answer `ray` (local frame) UNKNOWN where it starts, at its
+    // first texel, judged from the directions the known space says it knows (SeenDirections);
+    // never reads the probe. False where the known space cannot tell.
+    [[nodiscard]] bool passes_over(std::size_t i, const Ray& ray,
+                                   const TraceSettings& settings) const;
     // The same for any probe of the set, and for any corner probe of a grid cell.
     [[nodiscard]] bool seen_by_any(const glm::dvec3& point) const;
     [[nodiscard]] bool seen_by_corners(const GridCell& cell, const glm::dvec3& point) const;
