@@ -9,6 +9,12 @@
 #include <string>
 #include <thread>
 
+#include <ImfChannelList.h>
+#include <ImfFrameBuffer.h>
+#include <ImfHeader.h>
+#include <ImfInputFile.h>
+#include <ImfOutputFile.h>
+#include <ImfTiledOutputFile.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <unistd.h>
@@ -32,6 +38,43 @@ fs::path fresh_dir(const std::string& name) {
 template <class T>
 bool same_bits(const std::vector<T>& a, const std::vector<T>& b) {
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0;
+}
+
+// The probe file at `from` written again at `to` as another writer might: every channel as
+// `type`, with `compression`, in tiles or scanlines; the attributes kept.
+void rewrite_exr(const std::string& from, const std::string& to, Imf::PixelType type,
+                 Imf::Compression compression, bool tiled) {
+    Imf::InputFile in(from.c_str());
+    const Imath::Box2i window = in.header().dataWindow();
+    const std::size_t w = static_cast<std::size_t>(window.max.x - window.min.x + 1);
+    const std::size_t h = static_cast<std::size_t>(window.max.y - window.min.y + 1);
+    Imf::Header header = in.header();
+    header.compression() = compression;
+    Imf::ChannelList channels;
+    Imf::FrameBuffer frame;
+    std::vector<std::vector<float>> planes;
+    for (auto it = in.header().channels().begin(); it != in.header().channels().end(); ++it) {
+        channels.insert(it.name(), Imf::Channel(type));
+        planes.emplace_back(w * h);
+    }
+    std::size_t k = 0;
+    for (auto it = in.header().channels().begin(); it != in.header().channels().end(); ++it) {
+        frame.insert(it.name(), Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(planes[k++].data()),
+                                           sizeof(float), sizeof(float) * w));
+    }
+    in.setFrameBuffer(frame);
+    in.readPixels(window.min.y, window.max.y);
+    header.channels() = channels;
+    if (tiled) {
+        header.setTileDescription(Imf::TileDescription(16, 16, Imf::ONE_LEVEL));
+        Imf::TiledOutputFile out(to.c_str(), header);
+        out.setFrameBuffer(frame);
+        out.writeTiles(0, out.numXTiles() - 1, 0, out.numYTiles() - 1);
+    } else {
+        Imf::OutputFile out(to.c_str(), header);
+        out.setFrameBuffer(frame);
+        out.writePixels(static_cast<int>(h));
+    }
 }
 
 } // namespace
@@ -79,6 +122,50 @@ TEST(ProbeSet, ProbeSurvivesWriteReadBitForBit) {
     const ProbeMap covered = read_probe_exr(path);
     EXPECT_TRUE(same_bits(covered.coverage, map.coverage));
     EXPECT_TRUE(same_bits(covered.rgba, map.rgba));
+}
+
+// A probe file another writer made reads as the one lfprobe writes: channels stored as float,
+// other compressions, and tiles (read by the C++ API where the core reader takes scanlines
+// only); a file cut short is refused naming it.
+TEST(ProbeSet, AProbeFileWithOtherChannelTypesCompressionsOrTilesReadsTheSame) {
+    ProbeMap map(40, glm::dvec3(0.5, 0.25, -1.0));
+    for (std::size_t i = 0; i < map.texel_count(); ++i) {
+        if (i % 7 == 0) {
+            map.set_unknown(i);
+        } else {
+            map.set_surface(i, 0.5f + static_cast<float>(i) * 0.01f,
+                            glm::vec3(static_cast<float>(i % 11) / 11.0f, 0.25f, 0.75f),
+                            glm::vec3(0.0f, 0.8f, 0.6f), i % 3 == 0 ? 0.5f : 1.0f);
+        }
+    }
+    map.coverage.assign(map.texel_count(), Imath::half(0.75f));
+    const fs::path dir = fresh_dir("other_writers");
+    const std::string ours = (dir / "ours.exr").string();
+    write_probe_exr(ours, map);
+    const std::string other = (dir / "other.exr").string();
+    for (const bool tiled : {false, true}) {
+        for (const Imf::Compression compression : {Imf::NO_COMPRESSION, Imf::RLE_COMPRESSION,
+                                                   Imf::PIZ_COMPRESSION, Imf::ZIPS_COMPRESSION}) {
+            rewrite_exr(ours, other, Imf::FLOAT, compression, tiled);
+            const ProbeMap back = read_probe_exr(other);
+            EXPECT_EQ(back.position, map.position);
+            EXPECT_TRUE(same_bits(back.rgba, map.rgba)) << compression << " " << tiled;
+            EXPECT_TRUE(same_bits(back.distance, map.distance)) << compression << " " << tiled;
+            EXPECT_TRUE(same_bits(back.normal, map.normal)) << compression << " " << tiled;
+            EXPECT_TRUE(same_bits(back.coverage, map.coverage)) << compression << " " << tiled;
+        }
+    }
+    std::ifstream in(ours, std::ios::binary);
+    const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    for (const std::size_t keep : {bytes.size() / 2, bytes.size() - 10}) {
+        std::ofstream(other, std::ios::binary).write(bytes.data(), static_cast<long>(keep));
+        try {
+            (void)read_probe_exr(other);
+            ADD_FAILURE() << "a probe file cut to " << keep << " bytes was read";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(other), std::string::npos) << e.what();
+        }
+    }
 }
 
 // Issue 22, item 13: a probe EXR whose texels no bake writes (a negative or -inf distance, a
