@@ -16,6 +16,7 @@
 #include <ImfStringAttribute.h>
 #include <ImfThreading.h>
 #include <ImfVecAttribute.h>
+#include <libdeflate.h>
 #include <openexr.h>
 #include <tbb/parallel_for.h>
 
@@ -139,7 +140,8 @@ void require_meaningful_texels(const ProbeMap& map, const std::string& path) {
 
 // Reading with OpenEXR's core (C) API: each block of scanlines is decompressed straight into the
 // map's arrays, the blocks on all cores, where the C++ API's per-sample copy took a quarter of
-// each read (a 512² probe of the pump-room set on one core: 19.3 -> 14.3 ms). Files this reader
+// each read (a 512² probe of the pump-room set on one core: 19.3 -> 14.3 ms; 8.9 ms with ZIP
+// blocks inflated by libdeflate, inflate_zip_block). Files this reader
 // does not take (tiled, or deep) are read with the C++ API, as before.
 thread_local std::string exr_core_message; // the last error the core reported on this thread
 
@@ -154,6 +156,61 @@ void check_exr_core(exr_result_t result, const std::string& path, const char* do
         exr_core_message.clear();
         throw InputError(path + ": not a readable probe EXR (" + doing + ": " + detail + ")");
     }
+}
+
+// A ZIP block of an EXR file (OpenEXR's file layout): zlib-compressed bytes that, inflated, are
+// the differences of consecutive bytes (each stored + 128), and then the block's first half of
+// bytes interleaved with its second. Inflated with libdeflate, about 2.5 times as fast as the
+// zlib the core calls (a 512² pump-room probe: 14.4 -> 8.9 ms on one core); the rest as the
+// format has it. The pipeline's buffers are the core's: the packed bytes in, the unpacked out.
+exr_result_t inflate_zip_block(exr_decode_pipeline_t* block) {
+    const std::size_t packed = block->chunk.packed_size;
+    const std::size_t unpacked = block->chunk.unpacked_size;
+    auto* out = static_cast<std::uint8_t*>(block->unpacked_buffer);
+    if (packed == 0) {
+        return EXR_ERR_SUCCESS;
+    }
+    if (block->packed_buffer == nullptr || out == nullptr) {
+        return EXR_ERR_INVALID_ARGUMENT;
+    }
+    if (packed == unpacked) { // stored as is: the compressed form was no smaller
+        if (out != block->packed_buffer) {
+            std::memcpy(out, block->packed_buffer, unpacked);
+        }
+        return EXR_ERR_SUCCESS;
+    }
+    struct Free {
+        void operator()(libdeflate_decompressor* d) const { libdeflate_free_decompressor(d); }
+    };
+    thread_local const std::unique_ptr<libdeflate_decompressor, Free> inflater(
+        libdeflate_alloc_decompressor());
+    thread_local std::vector<std::uint8_t> bytes;
+    if (inflater == nullptr) {
+        return EXR_ERR_OUT_OF_MEMORY;
+    }
+    bytes.resize(unpacked);
+    std::size_t inflated = 0;
+    if (libdeflate_zlib_decompress(inflater.get(), block->packed_buffer, packed, bytes.data(),
+                                   unpacked, &inflated) != LIBDEFLATE_SUCCESS ||
+        inflated != unpacked) {
+        return EXR_ERR_CORRUPT_CHUNK;
+    }
+    // Through a local pointer: a byte store may alias the thread-local vector's own pointer,
+    // which the loop would otherwise reload (through the TLS lookup) at every byte.
+    std::uint8_t* const b = bytes.data();
+    for (std::size_t i = 1; i < unpacked; ++i) {
+        b[i] = static_cast<std::uint8_t>(b[i - 1] + b[i] - 128);
+    }
+    const std::uint8_t* first = b;
+    const std::uint8_t* second = b + (unpacked + 1) / 2;
+    for (std::size_t i = 0; i + 1 < unpacked; i += 2) {
+        out[i] = *first++;
+        out[i + 1] = *second++;
+    }
+    if (unpacked % 2 == 1) {
+        out[unpacked - 1] = *first;
+    }
+    return EXR_ERR_SUCCESS;
 }
 
 class ExrCoreFile {
@@ -265,6 +322,9 @@ std::optional<ProbeMap> read_probe_exr_core(const std::string& path) {
         throw InputError(path + ": not a readable probe EXR (" + std::to_string(lines) +
                          " scanlines a block)");
     }
+    exr_compression_t compression{};
+    check_exr_core(exr_get_compression(ctxt, 0, &compression), path, "its compression");
+    const bool zip = compression == EXR_COMPRESSION_ZIP || compression == EXR_COMPRESSION_ZIPS;
     const int blocks = (n + lines - 1) / lines;
     tbb::parallel_for(0, blocks, [&](int block) {
         exr_chunk_info_t chunk{};
@@ -295,6 +355,9 @@ std::optional<ProbeMap> read_probe_exr_core(const std::string& path) {
         }
         check_exr_core(exr_decoding_choose_default_routines(ctxt, 0, &decoder), path,
                        "a block's decoder");
+        if (zip && decoder.decompress_fn != nullptr) {
+            decoder.decompress_fn = inflate_zip_block;
+        }
         check_exr_core(exr_decoding_run(ctxt, 0, &decoder), path, "a block's pixels");
     });
     return map;
