@@ -286,6 +286,8 @@ struct ProbeField::KnownSpaceMasks {
     SeenUnion any;
     std::vector<SeenUnion> cells;
     std::vector<SeenUnion> probes; // each a union of one
+    // Each probe's known directions; null where the known space has none of its resolution.
+    std::vector<const SeenDirections*> directions;
     std::mutex mutex;
     std::vector<std::unique_ptr<Entry>> entries; // never removed: pointers stay valid
     std::atomic<const Entry*> last{nullptr};
@@ -348,9 +350,12 @@ bool ProbeField::saw_free(std::size_t i, const glm::dvec3& point) const {
 }
 
 bool ProbeField::passes_over(std::size_t i, const Ray& ray, const TraceSettings& settings) const {
-    const SeenDirections* directions =
-        known_space_ != nullptr ? known_space_->directions_of(i) : nullptr;
-    if (directions == nullptr || directions->resolution() != probe_resolution(i)) {
+    if (known_space_ == nullptr) {
+        return false;
+    }
+    build_seen_unions();
+    const SeenDirections* directions = known_space_masks_->directions.at(i);
+    if (directions == nullptr) {
         return false;
     }
     // A packed probe's distances load up to a step off, its own step when coarser (pack_probe).
@@ -399,7 +404,12 @@ void ProbeField::build_seen_unions_once(KnownSpaceMasks& masks) const {
     constexpr std::size_t kCellsBudget = std::size_t{128} << 20;
     constexpr std::size_t kProbesBudget = std::size_t{256} << 20;
     masks.probes.resize(probe_count());
+    masks.directions.resize(probe_count());
     for (std::size_t i = 0; i < probe_count(); ++i) {
+        const SeenDirections* directions = known_space_->directions_of(i);
+        if (directions != nullptr && directions->resolution() == probe_resolution(i)) {
+            masks.directions[i] = directions;
+        }
         const SeenVoxels* seen = known_space_->seen_by(i);
         masks.any.add(seen);
         masks.probes[i].add(seen);

@@ -45,21 +45,28 @@ struct Start {
     return Start{oct::texel_of_direction(glm::vec3(start / length), n), length, t_lo};
 }
 
+// Whether `start` lies behind a surface at `distance` by more than the fallback's reach (the walk
+// passes behind it, or meets its back face, with no fallback kept). Larger distances only ever
+// answer false: a bound of a distance judges as the distance does, or keeps the walk going.
+[[nodiscard]] inline bool behind_beyond_reach(const Start& start, int n,
+                                              const TraceSettings& settings, double distance) {
+    const double reach = std::max(settings.thickness, settings.fallback_thickness);
+    const double reach_per_metre = texel_verdict::thickness_per_metre(settings, n);
+    return start.length > distance + reach + reach_per_metre * distance;
+}
+
 // Whether the walk from `start` stops at its first texel: the texels around the home texel
 // (read too, so that the texel the walk's own arithmetic picks at an edge or across an
 // octant's fold is covered) are each unknown, or hold a surface the start lies behind by more
-// than the fallback's reach (passing behind it, or meeting its back face, with no fallback
-// kept). `distance_of(texel)` is the texel's distance, NaN where unknown; an upper bound of it
-// gives a judgement that dismisses only where the exact one does.
+// than the fallback's reach. `distance_of(texel)` is the texel's distance, NaN where unknown;
+// an upper bound of it gives a judgement that dismisses only where the exact one does.
 template <typename DistanceOf>
 [[nodiscard]] bool stops_at_first_texel(const Start& start, int n, const TraceSettings& settings,
                                         DistanceOf&& distance_of) {
-    const double reach = std::max(settings.thickness, settings.fallback_thickness);
-    const double reach_per_metre = texel_verdict::thickness_per_metre(settings, n);
     for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
             const double r = distance_of(oct::wrap_texel(start.home.x + dx, start.home.y + dy, n));
-            if (!std::isnan(r) && !(start.length > r + reach + reach_per_metre * r)) {
+            if (!std::isnan(r) && !behind_beyond_reach(start, n, settings, r)) {
                 return false;
             }
         }
