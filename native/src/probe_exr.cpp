@@ -1,19 +1,24 @@
 #include "lfprobe/probe_exr.hpp"
 
+#include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 #include <filesystem>
+#include <memory>
 #include <mutex>
+#include <new>
 #include <optional>
 #include <string>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include <ImfChannelList.h>
 #include <ImfFrameBuffer.h>
 #include <ImfHeader.h>
 #include <ImfInputFile.h>
-#include <ImfOutputFile.h>
-#include <ImfStringAttribute.h>
 #include <ImfThreading.h>
 #include <ImfVecAttribute.h>
 #include <libdeflate.h>
@@ -66,37 +71,6 @@ Imf::FrameBuffer probe_frame_buffer(ProbeMap& map) {
 }
 
 } // namespace
-
-void write_probe_exr(const std::string& path, const ProbeMap& map) {
-    use_all_cores_for_exr();
-    const int n = map.resolution;
-    Imf::Header header(n, n);
-    header.compression() = Imf::ZIP_COMPRESSION;
-    for (const char* name : {"R", "G", "B", "A", "N.X", "N.Y", "N.Z"}) {
-        header.channels().insert(name, Imf::Channel(Imf::HALF));
-    }
-    header.channels().insert("Z", Imf::Channel(Imf::FLOAT));
-    if (!map.coverage.empty()) {
-        header.channels().insert(kCoverageChannel, Imf::Channel(Imf::HALF));
-    }
-    header.insert(kFormatAttribute, Imf::StringAttribute(kFormatValue));
-    header.insert(kPositionAttribute,
-                  Imf::V3dAttribute(Imath::V3d(map.position.x, map.position.y, map.position.z)));
-    const std::string tmp = temporary_path_for(path);
-    try {
-        {
-            Imf::OutputFile file(tmp.c_str(), header);
-            // The writer only reads through the slices; the cast lets one layout serve both ways.
-            file.setFrameBuffer(probe_frame_buffer(const_cast<ProbeMap&>(map)));
-            file.writePixels(n);
-        }
-        std::filesystem::rename(tmp, path);
-    } catch (const std::exception& e) {
-        std::error_code ignored;
-        std::filesystem::remove(tmp, ignored);
-        throw IoError(path + ": cannot write probe EXR (" + e.what() + ")");
-    }
-}
 
 namespace {
 
@@ -363,7 +337,147 @@ std::optional<ProbeMap> read_probe_exr_core(const std::string& path) {
     return map;
 }
 
+// Writing: the blocks of 16 scanlines packed as the format lays them out (a row of each channel
+// in turn, in the header's order, little-endian) and compressed on all cores, ZIP-encoded with
+// libdeflate at level 4 (OpenEXR's own default level), then written in order through the core
+// API. Each block is the inverse of inflate_zip_block: the bytes split into the even and the odd
+// ones, each byte stored as its difference from the one before + 128, the whole deflated (zlib
+// format); a block that would not shrink is stored as it is, as readers expect.
+static_assert(std::endian::native == std::endian::little,
+              "probe files are little-endian: a big-endian host would swap bytes when packing");
+
+constexpr int kZipLinesPerBlock = 16;
+constexpr int kZipLevel = 4;
+
+std::vector<std::uint8_t> zip_block(std::vector<std::uint8_t>& raw) {
+    const std::size_t size = raw.size();
+    std::vector<std::uint8_t> shuffled(size);
+    const std::size_t half = (size + 1) / 2;
+    for (std::size_t k = 0; k < size / 2; ++k) {
+        shuffled[k] = raw[2 * k];
+        shuffled[half + k] = raw[2 * k + 1];
+    }
+    if (size % 2 == 1) {
+        shuffled[half - 1] = raw[size - 1];
+    }
+    std::uint8_t previous = shuffled.empty() ? 0 : shuffled[0];
+    for (std::size_t i = 1; i < size; ++i) {
+        const std::uint8_t value = shuffled[i];
+        shuffled[i] = static_cast<std::uint8_t>(value - previous + 128);
+        previous = value;
+    }
+    struct Free {
+        void operator()(libdeflate_compressor* c) const { libdeflate_free_compressor(c); }
+    };
+    thread_local const std::unique_ptr<libdeflate_compressor, Free> deflater(
+        libdeflate_alloc_compressor(kZipLevel));
+    if (deflater == nullptr) {
+        throw std::bad_alloc();
+    }
+    std::vector<std::uint8_t> packed(libdeflate_zlib_compress_bound(deflater.get(), size));
+    const std::size_t written = libdeflate_zlib_compress(deflater.get(), shuffled.data(), size,
+                                                         packed.data(), packed.size());
+    if (written == 0 || written >= size) {
+        return std::move(raw); // stored as is
+    }
+    packed.resize(written);
+    return packed;
+}
+
+void write_probe_exr_core(const std::string& path, const ProbeMap& map) {
+    exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
+    init.error_handler_fn = note_exr_core_error;
+    exr_core_message.clear();
+    exr_context_t ctxt = nullptr;
+    const auto check = [&](exr_result_t result, const char* doing) {
+        if (result != EXR_ERR_SUCCESS) {
+            const std::string detail =
+                exr_core_message.empty() ? exr_get_default_error_message(result) : exr_core_message;
+            exr_core_message.clear();
+            throw IoError(path + ": cannot write probe EXR (" + doing + ": " + detail + ")");
+        }
+    };
+    check(exr_start_write(&ctxt, path.c_str(), EXR_WRITE_FILE_DIRECTLY, &init), "opening");
+    struct Finish {
+        exr_context_t* context;
+        ~Finish() { exr_finish(context); }
+    } finish{&ctxt};
+    const int n = map.resolution;
+    int part = 0;
+    check(exr_add_part(ctxt, nullptr, EXR_STORAGE_SCANLINE, &part), "its part");
+    check(exr_initialize_required_attr_simple(ctxt, part, n, n, EXR_COMPRESSION_ZIP), "its header");
+    std::vector<std::pair<const char*, exr_pixel_type_t>> channels;
+    for (const char* name : {"R", "G", "B", "A", "N.X", "N.Y", "N.Z"}) {
+        channels.emplace_back(name, EXR_PIXEL_HALF);
+    }
+    channels.emplace_back("Z", EXR_PIXEL_FLOAT);
+    if (!map.coverage.empty()) {
+        channels.emplace_back(kCoverageChannel, EXR_PIXEL_HALF);
+    }
+    for (const auto& [name, type] : channels) {
+        check(exr_add_channel(ctxt, part, name, type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1),
+              "a channel");
+    }
+    check(exr_attr_set_string(ctxt, part, kFormatAttribute, kFormatValue), "its format");
+    const exr_attr_v3d_t position{{{map.position.x, map.position.y, map.position.z}}};
+    check(exr_attr_set_v3d(ctxt, part, kPositionAttribute, &position), "its position");
+    check(exr_write_header(ctxt), "its header");
+    // The channels in the order the header lists them (sorted by name), where the map keeps
+    // each (the reader's table: the map is only read here).
+    const exr_attr_chlist_t* listed = nullptr;
+    check(exr_get_channels(ctxt, part, &listed), "its channels");
+    std::vector<ChannelTarget> order;
+    std::size_t row_bytes = 0;
+    for (int c = 0; c < listed->num_channels; ++c) {
+        order.push_back(channel_target(const_cast<ProbeMap&>(map), listed->entries[c].name.str));
+        row_bytes += static_cast<std::size_t>(order.back().bytes_per_value) * n;
+    }
+    const int blocks = (n + kZipLinesPerBlock - 1) / kZipLinesPerBlock;
+    std::vector<std::vector<std::uint8_t>> packed(static_cast<std::size_t>(blocks));
+    tbb::parallel_for(0, blocks, [&](int block) {
+        const int y0 = block * kZipLinesPerBlock;
+        const int y1 = std::min(n, y0 + kZipLinesPerBlock);
+        std::vector<std::uint8_t> raw(row_bytes * static_cast<std::size_t>(y1 - y0));
+        std::uint8_t* to = raw.data();
+        for (int y = y0; y < y1; ++y) {
+            for (const ChannelTarget& channel : order) {
+                const std::size_t texel_bytes =
+                    static_cast<std::size_t>(channel.values_per_texel) * channel.bytes_per_value;
+                const std::uint8_t* from =
+                    channel.first + static_cast<std::size_t>(y) * n * texel_bytes;
+                for (int x = 0; x < n; ++x) {
+                    std::memcpy(to, from, static_cast<std::size_t>(channel.bytes_per_value));
+                    to += channel.bytes_per_value;
+                    from += texel_bytes;
+                }
+            }
+        }
+        packed[static_cast<std::size_t>(block)] = zip_block(raw);
+    });
+    for (int block = 0; block < blocks; ++block) {
+        const std::vector<std::uint8_t>& bytes = packed[static_cast<std::size_t>(block)];
+        check(exr_write_scanline_chunk(ctxt, part, block * kZipLinesPerBlock, bytes.data(),
+                                       bytes.size()),
+              "a block");
+    }
+}
+
 } // namespace
+
+void write_probe_exr(const std::string& path, const ProbeMap& map) {
+    const std::string tmp = temporary_path_for(path);
+    try {
+        write_probe_exr_core(tmp, map);
+        std::filesystem::rename(tmp, path);
+    } catch (const std::exception& e) {
+        std::error_code ignored;
+        std::filesystem::remove(tmp, ignored);
+        if (dynamic_cast<const IoError*>(&e) != nullptr) {
+            throw;
+        }
+        throw IoError(path + ": cannot write probe EXR (" + e.what() + ")");
+    }
+}
 
 ProbeMap read_probe_exr(const std::string& path) {
     use_all_cores_for_exr();
