@@ -79,11 +79,37 @@ namespace {
 // a normal that are numbers. Anything else (a negative or -inf distance, a NaN confidence) was
 // not written by a bake, and a trace would answer from it without complaint.
 void require_meaningful_texels(const ProbeMap& map, const std::string& path) {
+    // A pass over the bits first (a half's value as a float is arithmetic here, Imath's table
+    // being off): every texel of a file a bake wrote passes it; the message comes from the
+    // values, for the first texel that does not.
+    const auto unit_half = [](Imath::half h) { // in [0, 1], -0 included; NaN is not
+        const std::uint16_t bits = h.bits();
+        return bits <= 0x3C00 || bits == 0x8000;
+    };
+    const auto nan_half = [](Imath::half h) { return (h.bits() & 0x7FFF) > 0x7C00; };
+    std::size_t first_bad = map.texel_count();
+    for (std::size_t i = 0; i < map.texel_count(); ++i) {
+        const float d = map.distance[i];
+        bool bad = d < 0.0f || !unit_half(map.rgba[4 * i + 3]) ||
+                   (!map.coverage.empty() && !unit_half(map.coverage[i]));
+        if (std::isfinite(d)) {
+            for (std::size_t c = 0; c < 3; ++c) {
+                bad = bad || nan_half(map.rgba[4 * i + c]) || nan_half(map.normal[3 * i + c]);
+            }
+        }
+        if (bad) {
+            first_bad = i;
+            break;
+        }
+    }
+    if (first_bad == map.texel_count()) {
+        return;
+    }
     const auto where = [&](std::size_t i) {
         return path + ": texel (" + std::to_string(i % static_cast<std::size_t>(map.resolution)) +
                ", " + std::to_string(i / static_cast<std::size_t>(map.resolution)) + ")";
     };
-    for (std::size_t i = 0; i < map.texel_count(); ++i) {
+    for (std::size_t i = first_bad; i < map.texel_count(); ++i) {
         const float d = map.distance[i];
         if (d < 0.0f) {
             throw InputError(where(i) + ": distance " + std::to_string(d) +
