@@ -330,7 +330,7 @@ std::optional<ProbeMap> read_probe_exr_core(const std::string& path) {
         exr_chunk_info_t chunk{};
         check_exr_core(exr_read_scanline_chunk_info(ctxt, 0, block * lines, &chunk), path,
                        "a block's place");
-        exr_decode_pipeline_t decoder = EXR_DECODE_PIPELINE_INITIALIZER;
+        exr_decode_pipeline_t decoder{}; // all zero, as EXR_DECODE_PIPELINE_INITIALIZER
         check_exr_core(exr_decoding_initialize(ctxt, 0, &chunk, &decoder), path,
                        "a block's layout");
         struct Release {
