@@ -358,10 +358,13 @@ bool ProbeField::passes_over(std::size_t i, const Ray& ray, const TraceSettings&
     if (directions == nullptr) {
         return false;
     }
-    // A packed probe's distances load up to a step off, its own step when coarser (pack_probe).
+    // A packed probe's distances load up to a step off (its own step where coarser, pack_probe;
+    // a surface nearer than half a step loads as one step): two steps keep each bound above
+    // the loaded distance through every rounding on the way.
     const double step = storage().distance_step;
     const double slack =
-        step > 0.0 ? std::max(step, known_space_->farthest_distance() / kLargestDistanceCode) : 0.0;
+        step > 0.0 ? 2.0 * std::max(step, known_space_->farthest_distance() / kLargestDistanceCode)
+                   : 0.0;
     Ray local = ray;
     local.origin = ray.origin - probe_position(i);
     return directions->dismisses(local, settings, slack);
