@@ -365,15 +365,16 @@ std::optional<ProbeMap> read_probe_exr_core(const std::string& path) {
 
 // Writing: the blocks of 16 scanlines packed as the format lays them out (a row of each channel
 // in turn, in the header's order, little-endian) and compressed on all cores, ZIP-encoded with
-// libdeflate at level 4 (OpenEXR's own default level), then written in order through the core
-// API. Each block is the inverse of inflate_zip_block: the bytes split into the even and the odd
-// ones, each byte stored as its difference from the one before + 128, the whole deflated (zlib
-// format); a block that would not shrink is stored as it is, as readers expect.
+// libdeflate at level 1, then written in order through the core API. Level 1 against 4 and 6:
+// a 2048² probe's file within 1 % of the same size, written in 265 against 309 and 356 ms. Each
+// block is the inverse of inflate_zip_block: the bytes split into the even and the odd ones, each
+// byte stored as its difference from the one before + 128, the whole deflated (zlib format); a
+// block that would not shrink is stored as it is, as readers expect.
 static_assert(std::endian::native == std::endian::little,
               "probe files are little-endian: a big-endian host would swap bytes when packing");
 
 constexpr int kZipLinesPerBlock = 16;
-constexpr int kZipLevel = 4;
+constexpr int kZipLevel = 1;
 
 std::vector<std::uint8_t> zip_block(std::vector<std::uint8_t>& raw) {
     const std::size_t size = raw.size();
