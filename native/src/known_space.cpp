@@ -409,8 +409,9 @@ const SeenDirections* KnownSpace::directions_of(std::size_t index) const {
 
 KnownSpace KnownSpace::as_probe(std::size_t index) const {
     if (seen_.size() != 1 || directions_.size() > 1) {
-        throw InputError("known space: " + std::to_string(seen_.size()) +
-                         " probes where one was expected");
+        throw InputError(
+            "known space: " + std::to_string(std::max(seen_.size(), directions_.size())) +
+            " probes where one was expected");
     }
     KnownSpace moved = *this;
     moved.seen_.front().first = index;
