@@ -58,16 +58,16 @@ def texel_figures(test: dict, reference: dict) -> str:
     import numpy as np
     from scipy.ndimage import binary_erosion
     n = int(reference["resolution"])
-    def srgb(probe):
-        return metrics.srgb_encode(np.clip(np.asarray(probe["rgba"], np.float64).reshape(n, n, -1)[..., :3], 0, 1))
+    def rgb(probe):
+        return np.asarray(probe["rgba"], np.float64).reshape(n, n, -1)[..., :3]
     d_ref = np.asarray(reference["distance"], np.float64).reshape(n, n)
     d_test = np.asarray(test["distance"], np.float64).reshape(n, n)
     with np.errstate(invalid="ignore"):
         same = np.isfinite(d_ref) & np.isfinite(d_test) & (np.abs(d_test - d_ref) <= 0.02 * d_ref)
     inner = binary_erosion(same, iterations=3)
-    squared = ((srgb(test) - srgb(reference)) ** 2).mean(axis=-1)
     def psnr(mask):
-        return 10 * math.log10(1 / squared[mask].mean()) if mask.any() else float("nan")
+        value = metrics.psnr_over(rgb(reference), rgb(test), mask)
+        return float("nan") if value is None else value
     return (f"same surface {100 * same.mean():5.1f} % of texels, PSNR there {psnr(same):5.2f} dB, "
             f"away from their edges {psnr(inner):5.2f} dB")
 

@@ -393,18 +393,26 @@ bool KnownSpace::same_surface_voxel(const SurfaceVoxel& a, const SurfaceVoxel& b
     return a.x == b.x && a.y == b.y && a.z == b.z;
 }
 
-const SeenVoxels* KnownSpace::seen_by(std::size_t index) const {
+namespace {
+
+// Probe `index`'s record in a list sorted by probe index; null when it has none.
+template <typename Record>
+const Record* record_of(const std::vector<std::pair<std::uint64_t, Record>>& records,
+                        std::size_t index) {
     const auto found =
-        std::lower_bound(seen_.begin(), seen_.end(), static_cast<std::uint64_t>(index),
+        std::lower_bound(records.begin(), records.end(), static_cast<std::uint64_t>(index),
                          [](const auto& entry, std::uint64_t i) { return entry.first < i; });
-    return found != seen_.end() && found->first == index ? &found->second : nullptr;
+    return found != records.end() && found->first == index ? &found->second : nullptr;
+}
+
+} // namespace
+
+const SeenVoxels* KnownSpace::seen_by(std::size_t index) const {
+    return record_of(seen_, index);
 }
 
 const SeenDirections* KnownSpace::directions_of(std::size_t index) const {
-    const auto found =
-        std::lower_bound(directions_.begin(), directions_.end(), static_cast<std::uint64_t>(index),
-                         [](const auto& entry, std::uint64_t i) { return entry.first < i; });
-    return found != directions_.end() && found->first == index ? &found->second : nullptr;
+    return record_of(directions_, index);
 }
 
 KnownSpace KnownSpace::as_probe(std::size_t index) const {

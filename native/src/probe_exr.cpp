@@ -1,6 +1,7 @@
 #include "lfprobe/probe_exr.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -36,6 +37,32 @@ constexpr const char* kFormatValue = "lfprobe-probe 1";
 constexpr const char* kPositionAttribute = "lfprobe/position";
 // Optional: written only for maps that know their texels' coverage (ProbeMap::coverage).
 constexpr const char* kCoverageChannel = "coverage";
+
+// The channels every probe file holds, with the type written; a file without one of them is not
+// a probe. Listed once for the writer and both readers.
+struct ProbeChannel {
+    const char* name;
+    exr_pixel_type_t type;
+};
+constexpr std::array<ProbeChannel, 8> kProbeChannels{{{"R", EXR_PIXEL_HALF},
+                                                      {"G", EXR_PIXEL_HALF},
+                                                      {"B", EXR_PIXEL_HALF},
+                                                      {"A", EXR_PIXEL_HALF},
+                                                      {"Z", EXR_PIXEL_FLOAT},
+                                                      {"N.X", EXR_PIXEL_HALF},
+                                                      {"N.Y", EXR_PIXEL_HALF},
+                                                      {"N.Z", EXR_PIXEL_HALF}}};
+
+// Refuses a file that lacks one of kProbeChannels; `has(name)` says whether it has that one.
+template <typename Has>
+void require_probe_channels(const std::string& path, Has&& has) {
+    for (const ProbeChannel& channel : kProbeChannels) {
+        if (!has(channel.name)) {
+            throw InputError(path + ": expected channel '" + channel.name +
+                             "' of a probe EXR (R G B A Z N.X N.Y N.Z)");
+        }
+    }
+}
 
 void use_all_cores_for_exr() {
     static std::once_flag once;
@@ -149,12 +176,19 @@ void note_exr_core_error(exr_const_context_t, exr_result_t, const char* message)
     exr_core_message = message != nullptr ? message : "";
 }
 
+// What the core said of a failure on this thread: its message, else the code's; forgotten once
+// read, so that a later failure is not told with an earlier one's words.
+std::string exr_core_failure(exr_result_t result) {
+    std::string detail =
+        exr_core_message.empty() ? exr_get_default_error_message(result) : exr_core_message;
+    exr_core_message.clear();
+    return detail;
+}
+
 void check_exr_core(exr_result_t result, const std::string& path, const char* doing) {
     if (result != EXR_ERR_SUCCESS) {
-        const std::string detail =
-            exr_core_message.empty() ? exr_get_default_error_message(result) : exr_core_message;
-        exr_core_message.clear();
-        throw InputError(path + ": not a readable probe EXR (" + doing + ": " + detail + ")");
+        throw InputError(path + ": not a readable probe EXR (" + doing + ": " +
+                         exr_core_failure(result) + ")");
     }
 }
 
@@ -299,12 +333,7 @@ std::optional<ProbeMap> read_probe_exr_core(const std::string& path) {
         }
         return false;
     };
-    for (const char* name : {"R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z"}) {
-        if (!has_channel(name)) {
-            throw InputError(path + ": expected channel '" + name +
-                             "' of a probe EXR (R G B A Z N.X N.Y N.Z)");
-        }
-    }
+    require_probe_channels(path, has_channel);
     exr_attr_v3d_t stored{};
     glm::dvec3 position(0.0);
     if (exr_attr_get_v3d(ctxt, 0, kPositionAttribute, &stored) == EXR_ERR_SUCCESS) {
@@ -411,20 +440,19 @@ std::vector<std::uint8_t> zip_block(std::vector<std::uint8_t>& raw) {
     return packed;
 }
 
-void write_probe_exr_core(const std::string& path, const ProbeMap& map) {
+// Writes `map` to the file `tmp`; errors name `path`, the file the caller renames it to.
+void write_probe_exr_core(const std::string& tmp, const std::string& path, const ProbeMap& map) {
     exr_context_initializer_t init = EXR_DEFAULT_CONTEXT_INITIALIZER;
     init.error_handler_fn = note_exr_core_error;
     exr_core_message.clear();
     exr_context_t ctxt = nullptr;
     const auto check = [&](exr_result_t result, const char* doing) {
         if (result != EXR_ERR_SUCCESS) {
-            const std::string detail =
-                exr_core_message.empty() ? exr_get_default_error_message(result) : exr_core_message;
-            exr_core_message.clear();
-            throw IoError(path + ": cannot write probe EXR (" + doing + ": " + detail + ")");
+            throw IoError(path + ": cannot write probe EXR (" + doing + ": " +
+                          exr_core_failure(result) + ")");
         }
     };
-    check(exr_start_write(&ctxt, path.c_str(), EXR_WRITE_FILE_DIRECTLY, &init), "opening");
+    check(exr_start_write(&ctxt, tmp.c_str(), EXR_WRITE_FILE_DIRECTLY, &init), "opening");
     struct Finish {
         exr_context_t* context;
         ~Finish() { exr_finish(context); }
@@ -433,16 +461,14 @@ void write_probe_exr_core(const std::string& path, const ProbeMap& map) {
     int part = 0;
     check(exr_add_part(ctxt, nullptr, EXR_STORAGE_SCANLINE, &part), "its part");
     check(exr_initialize_required_attr_simple(ctxt, part, n, n, EXR_COMPRESSION_ZIP), "its header");
-    std::vector<std::pair<const char*, exr_pixel_type_t>> channels;
-    for (const char* name : {"R", "G", "B", "A", "N.X", "N.Y", "N.Z"}) {
-        channels.emplace_back(name, EXR_PIXEL_HALF);
+    for (const ProbeChannel& channel : kProbeChannels) {
+        check(exr_add_channel(ctxt, part, channel.name, channel.type, EXR_PERCEPTUALLY_LOGARITHMIC,
+                              1, 1),
+              "a channel");
     }
-    channels.emplace_back("Z", EXR_PIXEL_FLOAT);
     if (!map.coverage.empty()) {
-        channels.emplace_back(kCoverageChannel, EXR_PIXEL_HALF);
-    }
-    for (const auto& [name, type] : channels) {
-        check(exr_add_channel(ctxt, part, name, type, EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1),
+        check(exr_add_channel(ctxt, part, kCoverageChannel, EXR_PIXEL_HALF,
+                              EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1),
               "a channel");
     }
     check(exr_attr_set_string(ctxt, part, kFormatAttribute, kFormatValue), "its format");
@@ -494,7 +520,7 @@ void write_probe_exr_core(const std::string& path, const ProbeMap& map) {
 void write_probe_exr(const std::string& path, const ProbeMap& map) {
     const std::string tmp = temporary_path_for(path);
     try {
-        write_probe_exr_core(tmp, map);
+        write_probe_exr_core(tmp, path, map);
         std::filesystem::rename(tmp, path);
     } catch (const std::exception& e) {
         std::error_code ignored;
@@ -527,12 +553,8 @@ ProbeMap read_probe_exr(const std::string& path) {
                              std::to_string(w) + "×" + std::to_string(h));
         }
         const Imf::ChannelList& channels = file.header().channels();
-        for (const char* name : {"R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z"}) {
-            if (channels.findChannel(name) == nullptr) {
-                throw InputError(path + ": expected channel '" + name +
-                                 "' of a probe EXR (R G B A Z N.X N.Y N.Z)");
-            }
-        }
+        require_probe_channels(
+            path, [&](const char* name) { return channels.findChannel(name) != nullptr; });
         glm::dvec3 position(0.0);
         if (const auto* attr =
                 file.header().findTypedAttribute<Imf::V3dAttribute>(kPositionAttribute)) {

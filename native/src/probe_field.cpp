@@ -288,6 +288,10 @@ struct ProbeField::KnownSpaceMasks {
     std::vector<SeenUnion> probes; // each a union of one
     // Each probe's known directions; null where the known space has none of its resolution.
     std::vector<const SeenDirections*> directions;
+    // Added to their distance bounds: a packed probe's distances load up to a step off (its own
+    // step where coarser, pack_probe; a surface nearer than half a step loads as one step), and
+    // two steps keep each bound above the loaded distance through every rounding on the way.
+    double directions_slack = 0.0;
     std::mutex mutex;
     std::vector<std::unique_ptr<Entry>> entries; // never removed: pointers stay valid
     std::atomic<const Entry*> last{nullptr};
@@ -358,16 +362,9 @@ bool ProbeField::passes_over(std::size_t i, const Ray& ray, const TraceSettings&
     if (directions == nullptr) {
         return false;
     }
-    // A packed probe's distances load up to a step off (its own step where coarser, pack_probe;
-    // a surface nearer than half a step loads as one step): two steps keep each bound above
-    // the loaded distance through every rounding on the way.
-    const double step = storage().distance_step;
-    const double slack =
-        step > 0.0 ? 2.0 * std::max(step, known_space_->farthest_distance() / kLargestDistanceCode)
-                   : 0.0;
     Ray local = ray;
     local.origin = ray.origin - probe_position(i);
-    return directions->dismisses(local, settings, slack);
+    return directions->dismisses(local, settings, known_space_masks_->directions_slack);
 }
 
 bool ProbeField::seen_by_any(const glm::dvec3& point) const {
@@ -408,6 +405,10 @@ void ProbeField::build_seen_unions_once(KnownSpaceMasks& masks) const {
     constexpr std::size_t kProbesBudget = std::size_t{256} << 20;
     masks.probes.resize(probe_count());
     masks.directions.resize(probe_count());
+    const double step = storage().distance_step;
+    masks.directions_slack =
+        step > 0.0 ? 2.0 * std::max(step, known_space_->farthest_distance() / kLargestDistanceCode)
+                   : 0.0;
     for (std::size_t i = 0; i < probe_count(); ++i) {
         const SeenDirections* directions = known_space_->directions_of(i);
         if (directions != nullptr && directions->resolution() == probe_resolution(i)) {
