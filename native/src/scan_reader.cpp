@@ -13,6 +13,7 @@
 
 #include "lfprobe/color.hpp"
 #include "lfprobe/error.hpp"
+#include "lfprobe/huge_pages.hpp"
 #include "lfprobe/mapped_file.hpp"
 #include "lfprobe/world_offset.hpp"
 #include "ply_reader.hpp"
@@ -157,9 +158,9 @@ PointCloud merge_scans(std::vector<ScanFile> files, const MergeOptions& options)
     if (single) {
         cloud.positions = std::move(files[0].positions);
     } else {
-        cloud.positions.resize(total);
+        resize_in_huge_pages(cloud.positions, total);
     }
-    cloud.scan_index.resize(total);
+    resize_in_huge_pages(cloud.scan_index, total);
     // One file: its colours, normals and intensities are the cloud's as they are (moved, not
     // copied: a copy of a 10 M-point scan's colours costs as much as parsing a fifth of it).
     if (single) {
@@ -167,9 +168,9 @@ PointCloud merge_scans(std::vector<ScanFile> files, const MergeOptions& options)
         cloud.normals = std::move(files[0].normals);
         cloud.intensities = std::move(files[0].intensities);
     } else {
-        cloud.colors.resize(any_colour ? total : 0);
-        cloud.normals.resize(any_normal ? total : 0);
-        cloud.intensities.resize(any_intensity ? total : 0);
+        resize_in_huge_pages(cloud.colors, any_colour ? total : 0);
+        resize_in_huge_pages(cloud.normals, any_normal ? total : 0);
+        resize_in_huge_pages(cloud.intensities, any_intensity ? total : 0);
     }
 
     // sRGB mid grey, decoded: what a point shows when its file had no colour.

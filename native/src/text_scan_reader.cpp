@@ -1,10 +1,14 @@
 // The text scan formats. The prefix up to the first point (header lines, the .pts count) is
 // read serially: it fixes the column layout and the file's origin. The rest is cut into chunks
-// at line boundaries that are parsed in parallel, each into its own arrays, and concatenated.
+// at line boundaries whose lines are counted, then parsed in parallel, each into its own slice
+// of the file's arrays.
 #include "text_scan_reader.hpp"
 
+#include <algorithm>
+#include <array>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <optional>
 #include <string_view>
 
@@ -12,6 +16,7 @@
 #include <tbb/parallel_for.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/huge_pages.hpp"
 #include "scan_parsing.hpp"
 
 namespace lfprobe::detail {
@@ -33,16 +38,26 @@ struct TextPrefix {
     std::uint64_t first_count_line = 0;
 };
 
-// One chunk's share of the points, colours still raw sRGB values.
+// One chunk's share of the points: its slice of the file's arrays, which it fills in place
+// (a copy from per-chunk arrays into the file's cost a tenth of the parse, most of it in the
+// page faults of memory written twice). Colours stay raw sRGB values until decoded.
 struct ChunkPoints {
-    std::vector<glm::vec3> positions;
-    std::vector<glm::vec3> colours;
-    std::vector<glm::vec3> normals;
-    std::vector<float> intensities;
+    std::size_t first = 0;    // index of the chunk's first point in the file's arrays
+    std::size_t capacity = 0; // the chunk's lines: it cannot hold more points
+    std::size_t count = 0;    // the points it parsed
     double max_colour = 0.0;
     bool colours_decoded = false; // linear already (decode_srgb_in_place)
     std::uint64_t declared_points = 0;
     ParseFailure failure;
+};
+
+// The file's arrays, sized for every line to be a point; null where the file has no such
+// channel.
+struct PointArrays {
+    glm::vec3* positions = nullptr;
+    glm::vec3* colours = nullptr;
+    glm::vec3* normals = nullptr;
+    float* intensities = nullptr;
 };
 
 [[nodiscard]] std::string in_quotes(std::string_view text) {
@@ -366,10 +381,27 @@ private:
     std::uint64_t header_line_ = 0;
 };
 
-// Parses the point lines of [range.begin, range.end) into `out`. Stops at the first problem,
-// which it records with its byte offset rather than throwing.
+// Where column `column` of the point line at `line` starts: the columns of a line that parsed
+// are runs of non-separators. Only for messages, so the parse need not keep every start.
+[[nodiscard]] const char* column_start(const char* line, const char* end, std::size_t column) {
+    const char* p = line;
+    for (std::size_t i = 0;; ++i) {
+        while (p < end && is_separator(*p)) {
+            ++p;
+        }
+        if (i == column || p == end || *p == '\n') {
+            return p;
+        }
+        while (p < end && *p != '\n' && !is_separator(*p)) {
+            ++p;
+        }
+    }
+}
+
+// Parses the point lines of [range.begin, range.end) into the chunk's slice of `arrays`. Stops
+// at the first problem, which it records with its byte offset rather than throwing.
 void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, TextDialect dialect,
-                 ChunkPoints& out) {
+                 const PointArrays& arrays, ChunkPoints& out) {
     const std::size_t column_count = prefix.channels.size();
     const ChannelLayout& layout = prefix.layout;
     const auto ix = static_cast<std::size_t>(layout.index(Channel::X));
@@ -382,25 +414,22 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
                                             layout.index(Channel::NormalZ)};
     const int intensity_column = layout.index(Channel::Intensity);
 
-    const std::size_t expected_points =
-        (range.end - range.begin) / std::max<std::size_t>(prefix.first_line_bytes, 8) + 16;
-    out.positions.reserve(expected_points + expected_points / 8);
-    if (layout.has_colour) {
-        out.colours.reserve(out.positions.capacity());
-    }
-    if (layout.has_normal) {
-        out.normals.reserve(out.positions.capacity());
-    }
-    if (layout.has_intensity) {
-        out.intensities.reserve(out.positions.capacity());
-    }
-
-    std::vector<double> values(column_count);
-    std::vector<const char*> starts(column_count);
+    // A line's values on the stack for the usual column counts.
+    constexpr std::size_t kStackColumns = 16;
+    std::array<double, kStackColumns> stack_values{};
+    std::vector<double> heap_values(column_count > kStackColumns ? column_count : 0);
+    double* const values = column_count > kStackColumns ? heap_values.data() : stack_values.data();
     const char* const end = data + range.end;
     const char* p = data + range.begin;
+    std::size_t index = out.first;
+    const std::size_t limit = out.first + out.capacity;
+    double max_colour = 0.0;
     auto fail = [&](const char* where, std::string what) {
         out.failure.set(static_cast<std::size_t>(where - data), std::move(what));
+    };
+    auto quoted_column = [&](const char* line, std::size_t column) {
+        return in_quotes(token_at(column_start(line, end, column), end)) + " in " +
+               column_label(column, prefix.channels);
     };
 
     while (p < end) {
@@ -428,11 +457,11 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
             if (after == nullptr || (after < end && *after != '\n' && !is_separator(*after))) {
                 fail(p, "non-numeric field " + in_quotes(token_at(p, end)) + " in " +
                             column_label(column, prefix.channels) + ": expected a number");
+                out.count = index - out.first;
                 return;
             }
             if (column < column_count) {
                 values[column] = value;
-                starts[column] = p;
             }
             ++column;
             p = after;
@@ -447,7 +476,7 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
             if (dialect == TextDialect::Pts && column == 1) {
                 // Leica PTS: a count line starts another block of points.
                 std::uint64_t count = 0;
-                const std::string token = token_at(starts[0], end);
+                const std::string token = token_at(column_start(line_start, end, 0), end);
                 const auto [count_end, error] =
                     std::from_chars(token.data(), token.data() + token.size(), count);
                 if (error == std::errc() && count_end == token.data() + token.size()) {
@@ -457,11 +486,15 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
                 fail(line_start, "expected a point count (a single whole number) or " +
                                      std::to_string(column_count) + " columns, found " +
                                      in_quotes(token));
-                return;
+                break;
             }
             fail(line_start, "expected " + std::to_string(column_count) + " columns, found " +
                                  std::to_string(column));
-            return;
+            break;
+        }
+        if (index == limit) { // cannot happen: the chunk's lines were counted
+            fail(line_start, "more points than lines in a chunk (a bug in the reader)");
+            break;
         }
 
         // Checking the float32 result catches NaN, infinities, doubles that overflowed and
@@ -474,70 +507,106 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
             const std::size_t bad = !std::isfinite(position.x)   ? ix
                                     : !std::isfinite(position.y) ? iy
                                                                  : iz;
-            const std::string where =
-                in_quotes(token_at(starts[bad], end)) + " in " + column_label(bad, prefix.channels);
+            const std::string where = quoted_column(line_start, bad);
             fail(line_start,
                  std::isfinite(values[bad])
                      ? "coordinate " + where + " is too far from the file's first point for float32"
                      : "NaN or infinite coordinate " + where + ": expected a finite number");
-            return;
+            break;
         }
-        out.positions.push_back(position);
+        arrays.positions[index] = position;
 
-        if (layout.has_colour) {
+        if (arrays.colours != nullptr) {
             glm::vec3 colour;
+            bool in_range = true;
             for (int c = 0; c < 3; ++c) {
-                const auto col =
-                    static_cast<std::size_t>(colour_columns[static_cast<std::size_t>(c)]);
-                const double value = values[col];
-                if (!(value >= 0.0 && value <= 255.0)) {
-                    fail(line_start, "bad colour value " + in_quotes(token_at(starts[col], end)) +
-                                         " in " + column_label(col, prefix.channels) +
-                                         ": expected integers 0-255 or floats 0-1");
-                    return;
-                }
-                out.max_colour = std::max(out.max_colour, value);
+                const double value = values[colour_columns[static_cast<std::size_t>(c)]];
+                in_range = in_range && value >= 0.0 && value <= 255.0;
+                max_colour = std::max(max_colour, value);
                 colour[c] = static_cast<float>(value);
             }
-            out.colours.push_back(colour);
+            if (!in_range) {
+                for (int c = 0; c < 3; ++c) {
+                    const auto col =
+                        static_cast<std::size_t>(colour_columns[static_cast<std::size_t>(c)]);
+                    if (!(values[col] >= 0.0 && values[col] <= 255.0)) {
+                        fail(line_start, "bad colour value " + quoted_column(line_start, col) +
+                                             ": expected integers 0-255 or floats 0-1");
+                        break;
+                    }
+                }
+                break;
+            }
+            arrays.colours[index] = colour;
         }
-        if (layout.has_intensity) {
+        if (arrays.intensities != nullptr) {
             const auto col = static_cast<std::size_t>(intensity_column);
             const auto intensity = static_cast<float>(values[col]);
             if (!std::isfinite(intensity)) {
-                fail(line_start, "non-finite value " + in_quotes(token_at(starts[col], end)) +
-                                     " in " + column_label(col, prefix.channels) +
+                fail(line_start, "non-finite value " + quoted_column(line_start, col) +
                                      ": expected a finite number");
-                return;
+                break;
             }
-            out.intensities.push_back(intensity);
+            arrays.intensities[index] = intensity;
         }
-        if (layout.has_normal) {
+        if (arrays.normals != nullptr) {
             std::array<double, 3> normal{};
+            bool finite = true;
             for (std::size_t c = 0; c < 3; ++c) {
                 const auto col = static_cast<std::size_t>(normal_columns[c]);
                 normal[c] = values[col];
                 if (!std::isfinite(normal[c])) {
-                    fail(line_start, "non-finite value " + in_quotes(token_at(starts[col], end)) +
-                                         " in " + column_label(col, prefix.channels) +
+                    fail(line_start, "non-finite value " + quoted_column(line_start, col) +
                                          ": expected a finite number");
-                    return;
+                    finite = false;
+                    break;
                 }
             }
-            out.normals.push_back(unit_normal(normal[0], normal[1], normal[2]));
+            if (!finite) {
+                break;
+            }
+            arrays.normals[index] = unit_normal(normal[0], normal[1], normal[2]);
         }
+        ++index;
     }
+    out.count = index - out.first;
+    out.max_colour = max_colour;
 }
 
+// The newlines in [first, last), eight bytes at a time: a newline byte is one that XOR '\n'
+// leaves zero, found in every byte of a word at once without carries between bytes.
+[[nodiscard]] std::size_t count_newlines(const char* first, const char* last) {
+    constexpr std::uint64_t kNewlines = 0x0A0A0A0A0A0A0A0Aull;
+    constexpr std::uint64_t kLow7 = 0x7F7F7F7F7F7F7F7Full;
+    constexpr std::uint64_t kHigh = 0x8080808080808080ull;
+    std::size_t count = 0;
+    for (; last - first >= 8; first += 8) {
+        std::uint64_t word = 0;
+        std::memcpy(&word, first, sizeof(word));
+        const std::uint64_t x = word ^ kNewlines;
+        const std::uint64_t nonzero = ((x & kLow7) + kLow7) | x;
+        // One bit per newline byte, moved to the byte's bottom and summed by a multiply
+        // (no popcount instruction in the baseline x86-64 this builds for).
+        const std::uint64_t ones = (~nonzero & kHigh) >> 7;
+        count += static_cast<std::size_t>((ones * 0x0101010101010101ull) >> 56);
+    }
+    return count + static_cast<std::size_t>(std::count(first, last, '\n'));
+}
+
+// Moves each chunk's points down to follow the previous chunk's, where lines that held no
+// point (comments, blank lines, .pts count lines) left gaps; returns the number of points.
 template <class T>
-void concatenate(std::vector<ChunkPoints>& chunks, std::vector<T> ChunkPoints::*member,
-                 const std::vector<std::size_t>& offsets, std::vector<T>& out) {
-    out.resize(offsets.back());
-    tbb::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t i) {
-        std::vector<T>& part = chunks[i].*member;
-        std::copy(part.begin(), part.end(), out.begin() + static_cast<std::ptrdiff_t>(offsets[i]));
-        std::vector<T>().swap(part);
-    });
+void close_gaps(std::vector<T>& values, const std::vector<ChunkPoints>& chunks) {
+    std::size_t next = 0;
+    for (const ChunkPoints& chunk : chunks) {
+        if (chunk.first != next) {
+            const auto from = values.begin() + static_cast<std::ptrdiff_t>(chunk.first);
+            std::copy(from, from + static_cast<std::ptrdiff_t>(chunk.count),
+                      values.begin() + static_cast<std::ptrdiff_t>(next));
+        }
+        next += chunk.count;
+    }
+    values.resize(next);
 }
 
 [[nodiscard]] ScanFile read_text_scan(const MappedFile& file, const std::string& columns,
@@ -555,17 +624,52 @@ void concatenate(std::vector<ChunkPoints>& chunks, std::vector<T> ChunkPoints::*
     const std::vector<ByteRange> ranges =
         split_at_lines(file.data(), prefix.data_begin, file.size(),
                        parse_chunk_bytes(file.size() - prefix.data_begin));
+    // Every line may be a point: each chunk's lines, counted first, give it its slice of the
+    // file's arrays (a pass at memory speed, which also maps the file's pages in).
     std::vector<ChunkPoints> chunks(ranges.size());
+    tbb::parallel_for(std::size_t{0}, ranges.size(), [&](std::size_t i) {
+        const char* first = file.data() + ranges[i].begin;
+        const char* last = file.data() + ranges[i].end;
+        chunks[i].capacity =
+            count_newlines(first, last) + (last > first && last[-1] != '\n' ? 1 : 0);
+    });
+    std::size_t lines = 0;
+    for (ChunkPoints& chunk : chunks) {
+        chunk.first = lines;
+        lines += chunk.capacity;
+    }
+
+    ScanFile scan;
+    scan.path = path;
+    scan.origin = prefix.origin;
+    scan.scanner = prefix.scanner;
+    scan.has_scanner = prefix.has_scanner;
+    resize_in_huge_pages(scan.positions, lines);
+    PointArrays arrays;
+    arrays.positions = scan.positions.data();
+    if (prefix.layout.has_colour) {
+        resize_in_huge_pages(scan.colors, lines);
+        arrays.colours = scan.colors.data();
+    }
+    if (prefix.layout.has_normal) {
+        resize_in_huge_pages(scan.normals, lines);
+        arrays.normals = scan.normals.data();
+    }
+    if (prefix.layout.has_intensity) {
+        resize_in_huge_pages(scan.intensities, lines);
+        arrays.intensities = scan.intensities.data();
+    }
+
     tbb::parallel_for(std::size_t{0}, ranges.size(), [&](std::size_t i) {
         if (progress != nullptr) {
             progress->throw_if_cancelled();
         }
         ChunkPoints& chunk = chunks[i];
-        parse_chunk(file.data(), ranges[i], prefix, dialect, chunk);
+        parse_chunk(file.data(), ranges[i], prefix, dialect, arrays, chunk);
         // A value above 1 makes the whole file's colours 0-255 integers: decoded now, while
         // they are in cache; the rest once the file's largest value is known.
-        if (chunk.max_colour > 1.0 && !chunk.failure.failed) {
-            decode_srgb_in_place(chunk.colours.data(), chunk.colours.size(), chunk.max_colour);
+        if (arrays.colours != nullptr && chunk.max_colour > 1.0 && !chunk.failure.failed) {
+            decode_srgb_in_place(arrays.colours + chunk.first, chunk.count, chunk.max_colour);
             chunk.colours_decoded = true;
         }
         if (progress != nullptr) {
@@ -585,40 +689,39 @@ void concatenate(std::vector<ChunkPoints>& chunks, std::vector<T> ChunkPoints::*
             failure.message);
     }
 
-    std::vector<std::size_t> offsets{0};
+    std::size_t points = 0;
     std::uint64_t declared_points = prefix.declared_points;
     double max_colour = 0.0;
     for (const ChunkPoints& chunk : chunks) {
-        offsets.push_back(offsets.back() + chunk.positions.size());
+        points += chunk.count;
         declared_points += chunk.declared_points;
         max_colour = std::max(max_colour, chunk.max_colour);
     }
-    if (dialect == TextDialect::Pts && declared_points != offsets.back()) {
+    if (dialect == TextDialect::Pts && declared_points != points) {
         throw input_error_at({path, prefix.first_count_line, 0, true},
                              "the point count lines declare " + std::to_string(declared_points) +
-                                 " points, but the file holds " + std::to_string(offsets.back()));
+                                 " points, but the file holds " + std::to_string(points));
     }
 
-    ScanFile scan;
-    scan.path = path;
-    scan.origin = prefix.origin;
-    scan.scanner = prefix.scanner;
-    scan.has_scanner = prefix.has_scanner;
-    concatenate(chunks, &ChunkPoints::positions, offsets, scan.positions);
-    if (prefix.layout.has_colour) {
+    if (arrays.colours != nullptr) {
         tbb::parallel_for(std::size_t{0}, chunks.size(), [&](std::size_t i) {
-            ChunkPoints& chunk = chunks[i];
+            const ChunkPoints& chunk = chunks[i];
             if (!chunk.colours_decoded) {
-                decode_srgb_in_place(chunk.colours.data(), chunk.colours.size(), max_colour);
+                decode_srgb_in_place(arrays.colours + chunk.first, chunk.count, max_colour);
             }
         });
-        concatenate(chunks, &ChunkPoints::colours, offsets, scan.colors);
     }
-    if (prefix.layout.has_normal) {
-        concatenate(chunks, &ChunkPoints::normals, offsets, scan.normals);
-    }
-    if (prefix.layout.has_intensity) {
-        concatenate(chunks, &ChunkPoints::intensities, offsets, scan.intensities);
+    if (points != lines) {
+        close_gaps(scan.positions, chunks);
+        if (arrays.colours != nullptr) {
+            close_gaps(scan.colors, chunks);
+        }
+        if (arrays.normals != nullptr) {
+            close_gaps(scan.normals, chunks);
+        }
+        if (arrays.intensities != nullptr) {
+            close_gaps(scan.intensities, chunks);
+        }
     }
     return scan;
 }

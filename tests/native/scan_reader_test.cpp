@@ -307,6 +307,48 @@ TEST(XyzReader, ManyChunksKeepOrderAndReportTheEarliestError) {
     expect_input_error("big_short.xyz", bad, {"big_short.xyz:90000:", "expected 6 columns"});
 }
 
+// Each chunk fills its slice of the file's arrays, sized by its lines; lines that hold no point
+// (comments, blank lines, .pts count lines) leave gaps that are closed afterwards. Every point
+// must land in file order with its own colour and intensity, whichever chunk held a gap.
+TEST(XyzReader, LinesWithoutPointsInEveryChunkLeaveNoGaps) {
+    const int count = 150000; // about 4 MB: several parallel chunks
+    std::string xyz;
+    std::string pts;
+    int block = 0;
+    for (int i = 0; i < count; ++i) {
+        if (i % 7 == 3) {
+            xyz += "# a comment\n";
+        }
+        if (i % 11 == 5) {
+            xyz += "\n";
+        }
+        if (i % 1000 == 0) { // a .pts block of 1000 points
+            pts += "1000\n";
+            ++block;
+        }
+        const std::string line = std::to_string(i) + ".5 " + std::to_string(block) + " 0.25 " +
+                                 std::to_string(i % 97) + " " + std::to_string(i % 256) + " 3 " +
+                                 std::to_string(i % 251) + "\n";
+        xyz += line;
+        pts += line;
+    }
+    const ScanFile from_xyz = read("gaps.xyz", xyz, "x y z _ r g b");
+    const ScanFile from_pts = read("gaps.pts", pts);
+    ASSERT_EQ(from_xyz.positions.size(), static_cast<std::size_t>(count));
+    ASSERT_EQ(from_xyz.colors.size(), static_cast<std::size_t>(count));
+    ASSERT_EQ(from_pts.positions.size(), static_cast<std::size_t>(count));
+    ASSERT_EQ(from_pts.intensities.size(), static_cast<std::size_t>(count));
+    for (int i = 0; i < count; ++i) {
+        const auto index = static_cast<std::size_t>(i);
+        ASSERT_EQ(world(from_xyz, index).x, i + 0.5) << i;
+        ASSERT_EQ(from_xyz.colors[index].x, srgb8(i % 256)) << i;
+        ASSERT_EQ(world(from_pts, index).x, i + 0.5) << i;
+        ASSERT_EQ(world(from_pts, index).y, i / 1000 + 1) << i;
+        ASSERT_EQ(from_pts.intensities[index], static_cast<float>(i % 97)) << i;
+        ASSERT_EQ(from_pts.colors[index].z, srgb8(i % 251)) << i;
+    }
+}
+
 // Chunks decode their colours as soon as one of their values says 0-255; a chunk whose values
 // are all 0 or 1 waits for the file's largest value, which here says 0-255 too.
 TEST(XyzReader, ColoursOfEveryChunkFollowTheWholeFilesRange) {
