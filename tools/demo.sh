@@ -25,8 +25,9 @@ step_done() {  # prints how long the step took
   step_start=$now
 }
 
-echo "== 1/4 build: tools/setup.sh (installs what is missing, builds the native core) =="
-bash tools/setup.sh
+echo "== 1/4 build: tools/setup.sh (installs what is missing, builds the native core's Python module) =="
+# The module is all the demo runs (./lfprobe and the add-on load it); tools/test.sh builds the rest.
+LFPROBE_BUILD_TARGETS=_native bash tools/setup.sh
 step_done "build"
 
 echo "== 2/4 scene: the lab room (blend/lab_room/, blend/lab_room.blend) =="

@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # Installs what lfprobe needs on Debian 12 (only what is missing) and builds the native core:
 # the library, the Python module addon/lfprobe/_native*.so and the GoogleTest suite.
-# Environment: LFPROBE_BUILD_DIR (default build/), LFPROBE_WERROR=1 for -Werror.
+# Environment: LFPROBE_BUILD_DIR (default build/), LFPROBE_WERROR=1 for -Werror,
+# LFPROBE_BUILD_TARGETS (default: every target; the demo builds only the Python module, _native,
+# which is what ./lfprobe and the add-on load: the GoogleTest suite is two fifths of a build).
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 
@@ -33,4 +35,8 @@ werror=OFF
 [ "${LFPROBE_WERROR:-0}" = "1" ] && werror=ON
 cmake -S "$root" -B "$build" -G Ninja -DCMAKE_BUILD_TYPE=Release \
   -DPython_EXECUTABLE=/usr/bin/python3 -DLFPROBE_WERROR="$werror" >/dev/null
-cmake --build "$build" -j"$(nproc)"
+targets=()
+for target in ${LFPROBE_BUILD_TARGETS:-}; do
+  targets+=(--target "$target")
+done
+cmake --build "$build" -j"$(nproc)" "${targets[@]}"
