@@ -14,6 +14,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/huge_pages.hpp"
@@ -644,19 +645,30 @@ void close_gaps(std::vector<T>& values, const std::vector<ChunkPoints>& chunks) 
     scan.origin = prefix.origin;
     scan.scanner = prefix.scanner;
     scan.has_scanner = prefix.has_scanner;
-    resize_in_huge_pages(scan.positions, lines);
+    // Sized side by side: each array's pages are zeroed as it is sized, one thread an array.
+    tbb::parallel_invoke([&] { resize_in_huge_pages(scan.positions, lines); },
+                         [&] {
+                             if (prefix.layout.has_colour) {
+                                 resize_in_huge_pages(scan.colors, lines);
+                             }
+                         },
+                         [&] {
+                             if (prefix.layout.has_normal) {
+                                 resize_in_huge_pages(scan.normals, lines);
+                             }
+                             if (prefix.layout.has_intensity) {
+                                 resize_in_huge_pages(scan.intensities, lines);
+                             }
+                         });
     PointArrays arrays;
     arrays.positions = scan.positions.data();
     if (prefix.layout.has_colour) {
-        resize_in_huge_pages(scan.colors, lines);
         arrays.colours = scan.colors.data();
     }
     if (prefix.layout.has_normal) {
-        resize_in_huge_pages(scan.normals, lines);
         arrays.normals = scan.normals.data();
     }
     if (prefix.layout.has_intensity) {
-        resize_in_huge_pages(scan.intensities, lines);
         arrays.intensities = scan.intensities.data();
     }
 
