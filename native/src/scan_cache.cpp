@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -18,8 +19,11 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <tbb/parallel_for.h>
+
 #include "cache_file.hpp"
 #include "lfprobe/error.hpp"
+#include "lfprobe/huge_pages.hpp"
 #include "lfprobe/mapped_file.hpp"
 
 // xxHash as a header-only library (Debian's libxxhash-dev): nothing to link.
@@ -144,18 +148,36 @@ template <class T>
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-[[nodiscard]] bool all_finite(const std::vector<glm::vec3>& values) {
-    return std::all_of(values.begin(), values.end(), [](const glm::vec3& v) {
-        return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-    });
+[[nodiscard]] bool finite_value(const glm::vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-// What every scan reader guarantees of the scan it returns.
-[[nodiscard]] bool holds_a_valid_scan(const ScanFile& scan) {
-    return finite(scan.origin) && (!scan.has_scanner || finite(scan.scanner)) &&
-           all_finite(scan.positions) && all_finite(scan.colors) && all_finite(scan.normals) &&
-           std::all_of(scan.intensities.begin(), scan.intensities.end(),
-                       [](float i) { return std::isfinite(i); });
+[[nodiscard]] bool finite_value(float v) {
+    return std::isfinite(v);
+}
+
+// Copies `count` values from `from` into `values` on all cores, each block checked while it is
+// in cache: every value a scan reader returns is finite, so an entry written by a faulty or
+// foreign writer is parsed again rather than trusted. A 10 M-point entry took 0.17 s read by one
+// thread, a third of it in the page faults of the arrays it filled (now in huge pages).
+template <class T>
+[[nodiscard]] bool copy_finite(const char* from, std::size_t count, std::vector<T>& values) {
+    resize_in_huge_pages(values, count);
+    constexpr std::size_t kBlock = std::size_t{1} << 16;
+    std::atomic<bool> finite_all{true};
+    tbb::parallel_for(std::size_t{0}, (count + kBlock - 1) / kBlock, [&](std::size_t block) {
+        const std::size_t begin = block * kBlock;
+        const std::size_t end = std::min(count, begin + kBlock);
+        std::memcpy(values.data() + begin, from + begin * sizeof(T), (end - begin) * sizeof(T));
+        bool finite = true;
+        for (std::size_t i = begin; i < end; ++i) {
+            finite = finite && finite_value(values[i]);
+        }
+        if (!finite) {
+            finite_all.store(false, std::memory_order_relaxed);
+        }
+    });
+    return finite_all.load();
 }
 
 // The entry's content when it is complete and matches `key`, else nullopt.
@@ -206,12 +228,14 @@ template <class T>
         scan.origin = glm::dvec3(header.origin[0], header.origin[1], header.origin[2]);
         scan.scanner = glm::dvec3(header.scanner[0], header.scanner[1], header.scanner[2]);
         scan.has_scanner = (header.flags & has_scanner) != 0;
+        if (!finite(scan.origin) || (scan.has_scanner && !finite(scan.scanner))) {
+            return std::nullopt;
+        }
+        bool values_finite = true;
         auto take = [&](auto& values) {
             using T = typename std::remove_reference_t<decltype(values)>::value_type;
-            values.resize(static_cast<std::size_t>(n));
-            if (n != 0) {
-                std::memcpy(values.data(), cursor, array_bytes<T>(n));
-            }
+            values_finite =
+                values_finite && copy_finite(cursor, static_cast<std::size_t>(n), values);
             cursor += array_bytes<T>(n);
         };
         take(scan.positions);
@@ -224,10 +248,7 @@ template <class T>
         if (header.flags & has_intensities) {
             take(scan.intensities);
         }
-        // The checksum proves the entry is what was written; these prove it is what a reader
-        // returns (finite values only), so an entry written by a faulty or foreign writer is
-        // parsed again rather than trusted.
-        if (!holds_a_valid_scan(scan)) {
+        if (!values_finite) {
             return std::nullopt;
         }
         return scan;
