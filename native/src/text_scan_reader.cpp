@@ -12,6 +12,10 @@
 #include <optional>
 #include <string_view>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
@@ -574,23 +578,41 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
     out.max_colour = max_colour;
 }
 
-// The newlines in [first, last), eight bytes at a time: a newline byte is one that XOR '\n'
-// leaves zero, found in every byte of a word at once without carries between bytes.
+// The newlines in [first, last). SSE2 (every x86-64 has it): sixteen bytes compared at once,
+// the matches summed in byte counters that are widened before they can overflow; elsewhere
+// eight bytes at a time in a 64-bit word. Either runs at memory speed, where a byte loop took
+// a tenth of a parse.
 [[nodiscard]] std::size_t count_newlines(const char* first, const char* last) {
+    std::size_t count = 0;
+#if defined(__SSE2__)
+    const __m128i newline = _mm_set1_epi8('\n');
+    while (last - first >= 16) {
+        // At most 255 blocks of 16 bytes before the byte counters are summed.
+        const std::ptrdiff_t blocks = std::min<std::ptrdiff_t>((last - first) / 16, 255);
+        __m128i counters = _mm_setzero_si128();
+        for (std::ptrdiff_t b = 0; b < blocks; ++b, first += 16) {
+            const __m128i bytes = _mm_loadu_si128(reinterpret_cast<const __m128i*>(first));
+            // A match is 0xFF, minus one: subtracting adds one to the byte's counter.
+            counters = _mm_sub_epi8(counters, _mm_cmpeq_epi8(bytes, newline));
+        }
+        const __m128i sums = _mm_sad_epu8(counters, _mm_setzero_si128());
+        count += static_cast<std::size_t>(_mm_cvtsi128_si64(sums)) +
+                 static_cast<std::size_t>(_mm_cvtsi128_si64(_mm_unpackhi_epi64(sums, sums)));
+    }
+#else
     constexpr std::uint64_t kNewlines = 0x0A0A0A0A0A0A0A0Aull;
     constexpr std::uint64_t kLow7 = 0x7F7F7F7F7F7F7F7Full;
     constexpr std::uint64_t kHigh = 0x8080808080808080ull;
-    std::size_t count = 0;
     for (; last - first >= 8; first += 8) {
         std::uint64_t word = 0;
         std::memcpy(&word, first, sizeof(word));
         const std::uint64_t x = word ^ kNewlines;
         const std::uint64_t nonzero = ((x & kLow7) + kLow7) | x;
-        // One bit per newline byte, moved to the byte's bottom and summed by a multiply
-        // (no popcount instruction in the baseline x86-64 this builds for).
+        // One bit per newline byte, moved to the byte's bottom and summed by a multiply.
         const std::uint64_t ones = (~nonzero & kHigh) >> 7;
         count += static_cast<std::size_t>((ones * 0x0101010101010101ull) >> 56);
     }
+#endif
     return count + static_cast<std::size_t>(std::count(first, last, '\n'));
 }
 
