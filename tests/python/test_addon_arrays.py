@@ -59,6 +59,25 @@ def test_display_indices_are_a_fixed_sorted_subset_or_none():
     np.testing.assert_array_equal(chosen, scan_points.display_indices(1000, 50))
 
 
+def test_display_indices_show_the_points_they_always_showed():
+    # The subset a saved scene was imported with: the seeded draw, shuffled then sorted, as it
+    # was drawn before the shuffle was dropped and the sort became a mask.
+    for count, limit in ((1000, 50), (300_000, 100_000), (200_000, 199_999), (50_000, 7)):
+        before = np.random.default_rng(scan_points.DISPLAY_SEED).choice(count, size=limit, replace=False)
+        before.sort()
+        np.testing.assert_array_equal(scan_points.display_indices(count, limit), before)
+
+
+@pytest.mark.parametrize("count", [1, 4095, 4096, 8192, 10_000])
+def test_column_bounds_are_numpys_min_and_max(count):
+    values = np.random.default_rng(count).normal(size=(count, 3)).astype(np.float32)
+    low, high = scan_points.column_bounds(values)
+    np.testing.assert_array_equal(low, values.min(axis=0))
+    np.testing.assert_array_equal(high, values.max(axis=0))
+    with pytest.raises(ValueError):
+        scan_points.column_bounds(values[:0])
+
+
 def test_automatic_point_radius_is_half_the_spacing_over_the_box_faces():
     # A 1 m cube has 6 m² of faces: 600 points are 0.1 m apart, radius 0.05 m.
     assert scan_points.automatic_point_radius((0, 0, 0), (1, 1, 1), 600) == pytest.approx(0.05)

@@ -20,9 +20,12 @@ def display_indices(point_count: int, limit: int) -> np.ndarray | None:
     if limit <= 0 or point_count <= limit:
         return None
     rng = np.random.default_rng(DISPLAY_SEED)
-    chosen = rng.choice(point_count, size=limit, replace=False)
-    chosen.sort()
-    return chosen
+    # shuffle=False: the same points (the shuffle only reorders them, after they are drawn), and
+    # a mask puts them in file order in one pass where a sort of 2 M indices took 0.12 s.
+    chosen = rng.choice(point_count, size=limit, replace=False, shuffle=False)
+    mask = np.zeros(point_count, dtype=bool)
+    mask[chosen] = True
+    return np.flatnonzero(mask)
 
 
 def automatic_point_radius(bounds_min, bounds_max, displayed: int) -> float:
@@ -71,12 +74,34 @@ def file_of_each_point(file_of_scan: Sequence[int], scan_index: np.ndarray) -> n
     return np.asarray(file_of_scan, dtype=np.uint32)[np.asarray(scan_index)]
 
 
+def column_bounds(values: np.ndarray, rows_at_once: int = 4096) -> Tuple[np.ndarray, np.ndarray]:
+    """(min, max) of each column of an (n, 3) array, n > 0. numpy reduces a narrow array down its
+    long axis slowly (0.39 s for both of 10 M points): viewed as rows of `rows_at_once` points,
+    the reduction runs along wide rows, then over the few that are left (16 ms)."""
+    whole = len(values) - len(values) % rows_at_once
+    low = high = None
+    if whole > 0:
+        wide = values[:whole].reshape(-1, values.shape[1] * rows_at_once)
+        low = wide.min(axis=0).reshape(rows_at_once, -1).min(axis=0)
+        high = wide.max(axis=0).reshape(rows_at_once, -1).max(axis=0)
+    if whole < len(values):
+        rest = values[whole:]
+        low = rest.min(axis=0) if low is None else np.minimum(low, rest.min(axis=0))
+        high = rest.max(axis=0) if high is None else np.maximum(high, rest.max(axis=0))
+    if low is None:
+        raise ValueError("column_bounds: no values")
+    return low, high
+
+
 def object_points(positions: np.ndarray, colors: Optional[np.ndarray], members: np.ndarray,
                   display_limit: int) -> tuple:
     """(bounds (min, max), displayed positions, displayed colours or None) of one object's
     points: the bounds of all its members, the display subset of them (display_indices)."""
-    own = positions[members]
-    bounds = (tuple(map(float, own.min(axis=0))), tuple(map(float, own.max(axis=0))))
+    # Members are sorted and distinct (object_groups): as many as the points are all of them,
+    # whose bounds need no copy of 10 M positions first.
+    own = positions if len(members) == len(positions) else positions[members]
+    low, high = column_bounds(own)
+    bounds = (tuple(map(float, low)), tuple(map(float, high)))
     subset = display_indices(len(members), display_limit)
     if subset is not None:
         members = members[subset]
