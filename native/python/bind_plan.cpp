@@ -121,7 +121,10 @@ void bind_plan(py::module_& m) {
             return std::make_unique<Job>(
                 std::function<ProbePlan(Progress&)>([=](Progress& progress) {
                     const LocalGeometry geometry = estimate_local_geometry(*cloud, {}, &progress);
-                    return plan_probes(*cloud, geometry, placement, settings, &progress);
+                    const PointHierarchy hierarchy =
+                        hierarchy_for_bakes(*cloud, geometry, settings.bake, &progress);
+                    return plan_probes(*cloud, geometry, placement, settings, &progress,
+                                       &hierarchy);
                 }),
                 std::function<py::object(ProbePlan &&)>([offset](ProbePlan&& plan) -> py::object {
                     return py::module_::import("json").attr("loads")(plan.to_json(offset).dump());
@@ -148,8 +151,8 @@ void bind_plan(py::module_& m) {
                 std::function<BakeSummary(Progress&)>([=](Progress& progress) {
                     const CloudBakeSource source =
                         prepare_cloud_bake(cloud, settings.bake, {}, &progress, cache_dir);
-                    const ProbePlan plan =
-                        plan_probes(*cloud, source.geometry, placement, settings, &progress);
+                    const ProbePlan plan = plan_probes(*cloud, source.geometry, placement, settings,
+                                                       &progress, &source.hierarchy);
                     BakeSummary summary =
                         bake_planned_probe_set(*cloud, source.geometry, placement, plan, settings,
                                                folder, sources, &progress, &source.hierarchy);

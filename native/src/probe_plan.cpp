@@ -36,11 +36,16 @@ bool worth_keeping(ProbeClass c) {
 }
 
 ProbeClassification quick_classify(const PointCloud& cloud, const LocalGeometry& geometry,
-                                   const glm::dvec3& at, const PlanSettings& settings,
+                                   const PointHierarchy* hierarchy, const glm::dvec3& at,
+                                   const PlanSettings& settings,
                                    const ClassificationSettings& classes) {
     BakeSettings quick = settings.bake;
     quick.resolution = settings.classify_resolution;
     quick.face_the_probe = false; // back faces are how a probe inside geometry shows
+    if (hierarchy != nullptr && !hierarchy->levels.empty() && quick.lod_texels > 0.0f) {
+        return classify_probe(bake_probe_from_hierarchy(cloud, geometry, *hierarchy, at, quick),
+                              classes);
+    }
     return classify_probe(bake_probe_from_cloud(cloud, geometry, at, quick), classes);
 }
 
@@ -85,7 +90,7 @@ json ProbePlan::to_json(const glm::dvec3& world_offset) const {
 
 ProbePlan plan_probes(const PointCloud& cloud, const LocalGeometry& geometry,
                       const ProbePlacement& placement, const PlanSettings& settings,
-                      Progress* progress) {
+                      Progress* progress, const PointHierarchy* hierarchy) {
     if (placement.positions.empty()) {
         throw InputError("plan: no probe positions given");
     }
@@ -136,7 +141,8 @@ ProbePlan plan_probes(const PointCloud& cloud, const LocalGeometry& geometry,
         p.original = placement.positions[i];
         p.position = p.original;
         if (settings.classify) {
-            p.classification = quick_classify(cloud, geometry, p.position, settings, classes);
+            p.classification =
+                quick_classify(cloud, geometry, hierarchy, p.position, settings, classes);
             p.found = p.classification.kind;
             const ProbeClassification found = p.classification;
             for (int move = 0;
@@ -160,7 +166,8 @@ ProbePlan plan_probes(const PointCloud& cloud, const LocalGeometry& geometry,
                 }
                 p.position = candidate;
                 p.moved = true;
-                p.classification = quick_classify(cloud, geometry, p.position, settings, classes);
+                p.classification =
+                    quick_classify(cloud, geometry, hierarchy, p.position, settings, classes);
             }
             // Out of an object always; elsewhere only where the probe then sees more.
             if (p.moved && p.found != ProbeClass::Inside &&

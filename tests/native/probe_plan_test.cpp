@@ -143,6 +143,38 @@ TEST(ProbePlan, MovesOrDropsWhatIsNotUseful) {
     EXPECT_EQ(bounded.probes[0].resolution, 8);
 }
 
+// The quick bakes that classify bake from the point hierarchy when the planner is given it, as
+// the probes' own bakes do: the same classes, moves and drops as from every point, on the cases
+// above (inside the box, against the wall, in the open, and a move bounded too short).
+TEST(ProbePlan, ClassifyingFromThePointHierarchyPlansAsFromEveryPoint) {
+    const ProbePlacement placement = ProbePlacement::from_positions(
+        {glm::dvec3(kBoxCentre), glm::dvec3(1.999, 0.0, 1.2), glm::dvec3(0.3, 0.6, 1.3)});
+    PlanSettings settings;
+    settings.auto_resolution = false;
+    settings.fixed_resolution = 96;
+    const PointHierarchy hierarchy =
+        hierarchy_for_bakes(scene().cloud, scene().geometry, settings.bake, nullptr);
+    ASSERT_FALSE(hierarchy.levels.empty());
+    for (const double max_move : {0.3, 0.05}) {
+        settings.max_move = max_move;
+        const ProbePlan every_point =
+            plan_probes(scene().cloud, scene().geometry, placement, settings);
+        const ProbePlan from_hierarchy =
+            plan_probes(scene().cloud, scene().geometry, placement, settings, nullptr, &hierarchy);
+        ASSERT_EQ(from_hierarchy.probes.size(), every_point.probes.size());
+        for (std::size_t i = 0; i < every_point.probes.size(); ++i) {
+            const PlannedProbe& a = every_point.probes[i];
+            const PlannedProbe& b = from_hierarchy.probes[i];
+            EXPECT_EQ(b.found, a.found) << "probe " << i << ", moves up to " << max_move;
+            EXPECT_EQ(b.kind, a.kind) << "probe " << i << ", moves up to " << max_move;
+            EXPECT_EQ(b.moved, a.moved) << "probe " << i << ", moves up to " << max_move;
+            EXPECT_EQ(b.dropped, a.dropped) << "probe " << i << ", moves up to " << max_move;
+            EXPECT_LT(glm::length(b.position - a.position), 0.02)
+                << "probe " << i << ", moves up to " << max_move;
+        }
+    }
+}
+
 // The plan of one probe at `at` in the test scene.
 PlannedProbe plan_one(const glm::dvec3& at, const PlanSettings& settings) {
     return plan_probes(scene().cloud, scene().geometry, ProbePlacement::from_positions({at}),
