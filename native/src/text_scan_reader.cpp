@@ -32,8 +32,7 @@ enum class TextDialect { Xyz, Pts };
 
 // Everything the serial pass learns before the first point line.
 struct TextPrefix {
-    std::size_t data_begin = 0; // byte offset of the first point line
-    std::size_t first_line_bytes = 0;
+    std::size_t data_begin = 0;    // byte offset of the first point line
     std::vector<Channel> channels; // one per column
     ChannelLayout layout;
     glm::dvec3 origin{0.0};
@@ -278,7 +277,6 @@ public:
             }
             read_first_point(fields, line_number, prefix);
             prefix.data_begin = position;
-            prefix.first_line_bytes = next - position;
             return prefix;
         }
 
@@ -617,7 +615,7 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
 }
 
 // Moves each chunk's points down to follow the previous chunk's, where lines that held no
-// point (comments, blank lines, .pts count lines) left gaps; returns the number of points.
+// point (comments, blank lines, .pts count lines) left gaps, and trims the array to the points.
 template <class T>
 void close_gaps(std::vector<T>& values, const std::vector<ChunkPoints>& chunks) {
     std::size_t next = 0;

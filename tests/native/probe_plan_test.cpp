@@ -108,13 +108,24 @@ TEST(ProbeClassification, ProbeOneMillimetreFromAWallIsTooClose) {
     EXPECT_THROW((void)classify_probe(ProbeMap{}), InputError);
 }
 
-TEST(ProbePlan, MovesOrDropsWhatIsNotUseful) {
-    const ProbePlacement placement = ProbePlacement::from_positions(
+// Probes inside the box, 1 mm from a wall and in the open, planned at a fixed 96².
+const ProbePlacement& hard_cases() {
+    static const ProbePlacement placement = ProbePlacement::from_positions(
         {glm::dvec3(kBoxCentre), glm::dvec3(1.999, 0.0, 1.2), glm::dvec3(0.3, 0.6, 1.3)});
+    return placement;
+}
+
+PlanSettings fixed_resolution_plan(double max_move) {
     PlanSettings settings;
     settings.auto_resolution = false;
     settings.fixed_resolution = 96;
-    settings.max_move = 0.3;
+    settings.max_move = max_move;
+    return settings;
+}
+
+TEST(ProbePlan, MovesOrDropsWhatIsNotUseful) {
+    const ProbePlacement& placement = hard_cases();
+    PlanSettings settings = fixed_resolution_plan(0.3);
     const ProbePlan plan = plan_probes(scene().cloud, scene().geometry, placement, settings);
     ASSERT_EQ(plan.probes.size(), 3u);
     // Inside the box: out through the nearest face, 0.2 + 0.05 m.
@@ -147,16 +158,12 @@ TEST(ProbePlan, MovesOrDropsWhatIsNotUseful) {
 // the probes' own bakes do: the same classes, moves and drops as from every point, on the cases
 // above (inside the box, against the wall, in the open, and a move bounded too short).
 TEST(ProbePlan, ClassifyingFromThePointHierarchyPlansAsFromEveryPoint) {
-    const ProbePlacement placement = ProbePlacement::from_positions(
-        {glm::dvec3(kBoxCentre), glm::dvec3(1.999, 0.0, 1.2), glm::dvec3(0.3, 0.6, 1.3)});
-    PlanSettings settings;
-    settings.auto_resolution = false;
-    settings.fixed_resolution = 96;
+    const ProbePlacement& placement = hard_cases();
     const PointHierarchy hierarchy =
-        hierarchy_for_bakes(scene().cloud, scene().geometry, settings.bake, nullptr);
+        hierarchy_for_bakes(scene().cloud, scene().geometry, BakeSettings{}, nullptr);
     ASSERT_FALSE(hierarchy.levels.empty());
     for (const double max_move : {0.3, 0.05}) {
-        settings.max_move = max_move;
+        const PlanSettings settings = fixed_resolution_plan(max_move);
         const ProbePlan every_point =
             plan_probes(scene().cloud, scene().geometry, placement, settings);
         const ProbePlan from_hierarchy =
