@@ -144,15 +144,14 @@ template <class T>
     return static_cast<std::size_t>(count) * sizeof(T);
 }
 
-[[nodiscard]] bool finite(const glm::dvec3& v) {
+// Whether a value an entry holds (a coordinate, a point's position, colour or normal, an
+// intensity) is finite in every component.
+template <typename T, glm::qualifier Q>
+[[nodiscard]] bool finite(const glm::vec<3, T, Q>& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
-[[nodiscard]] bool finite_value(const glm::vec3& v) {
-    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
-[[nodiscard]] bool finite_value(float v) {
+[[nodiscard]] bool finite(float v) {
     return std::isfinite(v);
 }
 
@@ -169,11 +168,11 @@ template <class T>
         const std::size_t begin = block * kBlock;
         const std::size_t end = std::min(count, begin + kBlock);
         std::memcpy(values.data() + begin, from + begin * sizeof(T), (end - begin) * sizeof(T));
-        bool finite = true;
+        bool block_finite = true;
         for (std::size_t i = begin; i < end; ++i) {
-            finite = finite && finite_value(values[i]);
+            block_finite = block_finite && finite(values[i]);
         }
-        if (!finite) {
+        if (!block_finite) {
             finite_all.store(false, std::memory_order_relaxed);
         }
     });

@@ -17,6 +17,7 @@ import numpy as np
 from . import native
 from .errors import InputError
 from .scan_formats import ScanArrays, is_library_format, read_scan_arrays
+from .scan_points import column_bounds
 
 NEAR_ORIGIN_LIMIT = 1024.0  # native world_offset.hpp: kNearOriginLimit
 STATION_COLUMN = "station"  # the name of a merged export's station column in `columns`
@@ -243,8 +244,9 @@ def _from_parts(_native, parts: List[ScanArrays], normals_of: list, world_offset
     else:
         non_empty = [p.positions for p in parts if len(p.positions)]
         if non_empty:
-            low = np.min([p.min(axis=0) for p in non_empty], axis=0)
-            high = np.max([p.max(axis=0) for p in non_empty], axis=0)
+            bounds = [column_bounds(p) for p in non_empty]
+            low = np.min([b[0] for b in bounds], axis=0)
+            high = np.max([b[1] for b in bounds], axis=0)
             offset = world_offset_for_bounds(low, high)
         else:
             offset = np.zeros(3)
