@@ -92,3 +92,53 @@ TEST(LocalGeometry, NormalsAndSpacingAreTheSameForAnyThreadCount) {
     ASSERT_EQ(many.normals, one.normals);
     ASSERT_EQ(many.spatial_order, one.spatial_order);
 }
+
+namespace {
+
+// R · diag(values) · Rᵀ for the rotation R whose columns are `axes` (orthonormal).
+void covariance_of(const glm::dvec3 (&axes)[3], const double (&values)[3], double out[3][3]) {
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) {
+            out[i][j] = 0.0;
+            for (int k = 0; k < 3; ++k) {
+                out[i][j] += values[k] * axes[k][i] * axes[k][j];
+            }
+        }
+    }
+}
+
+} // namespace
+
+// The closed-form solver on what scans give it: surfaces so flat that the smallest eigenvalue
+// is 1e-14 of the largest, at any orientation and at any scale of the coordinates; and the
+// cases it hands to Jacobi, where the smallest eigenvector is not unique (a line's
+// neighbourhood, a ball's, no spread at all): any unit vector the spread allows.
+TEST(LocalGeometry, SmallestEigenvectorOfFlatLineLikeAndDegenerateSpreads) {
+    std::mt19937 random(5);
+    std::normal_distribution<double> g(0.0, 1.0);
+    for (int trial = 0; trial < 200; ++trial) {
+        const glm::dvec3 a = glm::normalize(glm::dvec3(g(random), g(random), g(random)));
+        const glm::dvec3 b =
+            glm::normalize(glm::cross(a, glm::dvec3(g(random), g(random), g(random))));
+        const glm::dvec3 axes[3] = {a, b, glm::cross(a, b)};
+        const double scale = std::pow(10.0, trial % 13 - 9);       // 1e-9 to 1e3
+        const double flatness = std::pow(10.0, -(trial % 15) - 1); // 1e-1 to 1e-15
+        double flat[3][3];
+        covariance_of(axes, {scale, 0.4 * scale, flatness * 0.4 * scale}, flat);
+        const glm::vec3 n = smallest_eigenvector(flat);
+        EXPECT_NEAR(std::abs(glm::dot(glm::dvec3(n), axes[2])), 1.0, 1e-6)
+            << "trial " << trial << " scale " << scale << " flatness " << flatness;
+
+        double line[3][3];
+        covariance_of(axes, {scale, 1e-9 * scale, (1e-9 + 1e-15) * scale}, line);
+        const glm::vec3 l = smallest_eigenvector(line);
+        EXPECT_NEAR(glm::length(l), 1.0f, 1e-5f);
+        EXPECT_LT(std::abs(glm::dot(glm::dvec3(l), axes[0])), 1e-6) << "trial " << trial;
+    }
+    const double zero[3][3] = {{0, 0, 0}, {0, 0, 0}, {0, 0, 0}};
+    const double ball[3][3] = {{2, 0, 0}, {0, 2, 0}, {0, 0, 2}};
+    for (const auto* m : {&zero, &ball}) {
+        const glm::vec3 v = smallest_eigenvector(*m);
+        EXPECT_NEAR(glm::length(v), 1.0f, 1e-6f);
+    }
+}

@@ -49,8 +49,10 @@ struct LocalGeometry {
                                                     const LocalGeometryOptions& options,
                                                     Progress* progress = nullptr);
 
-// The eigenvector of the smallest eigenvalue of a symmetric 3×3 matrix (Jacobi rotations;
-// exact enough for PCA and free of the cancellation of closed-form cubic solutions).
+// The unit eigenvector of the smallest eigenvalue of a symmetric positive semi-definite 3×3
+// matrix (a covariance): the characteristic cubic's smallest root by Newton's method, the
+// vector from the cross products of A - λI's rows; Jacobi rotations where the two smallest
+// eigenvalues lie too close for that (the vector is then any the spread allows).
 [[nodiscard]] glm::vec3 smallest_eigenvector(const double covariance[3][3]);
 
 } // namespace lfprobe
