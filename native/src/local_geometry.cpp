@@ -393,9 +393,8 @@ glm::vec3 smallest_eigenvector(const double covariance[3][3]) {
     // it, and the cross product is exact to rounding; λ's own rounding (~1e-16 of the largest
     // eigenvalue) tilts the vector by as little.
     // Where the two smallest eigenvalues lie close (points along a line, a zero matrix), the
-    // rows barely span a plane and Jacobi decides. Jacobi alone took four to six sweeps on
-    // scans, whose points lie nearly exactly on their surfaces: a seventh to an eighth of the
-    // whole estimate on the demo's 0.1° lab-room scans.
+    // rows barely span a plane and Jacobi decides. Jacobi alone was a seventh of the whole
+    // estimate on the lab room's 0.1° scans, whose points lie nearly exactly on their surfaces.
     double scale = 0.0;
     for (int i = 0; i < 3; ++i) {
         for (int j = 0; j < 3; ++j) {
