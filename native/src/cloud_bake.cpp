@@ -4,6 +4,7 @@
 #include <filesystem>
 #include <optional>
 
+#include "lfprobe/bake_scratch.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/prepared_cloud_cache.hpp"
 
@@ -121,6 +122,8 @@ std::vector<StagedProbe> stage_probes(const ProbePlacement& placement,
         }
     }
     std::vector<StagedProbe> staged;
+    // One probe's scratch arrays serve the next (bake_scratch.hpp).
+    const BakeScratchScope scratch;
     for (const std::size_t i : indices) {
         if (progress != nullptr) {
             progress->throw_if_cancelled();

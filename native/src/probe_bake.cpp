@@ -16,6 +16,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "lfprobe/bake_scratch.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/octahedral.hpp"
 #include "lfprobe/point_colours.hpp"
@@ -260,8 +261,8 @@ struct ColourSum {
 // `count` copies of `value`, written on all cores: a 2048² map's texel buffers are 200 MB,
 // which a vector's constructor writes on one thread.
 template <class T>
-std::unique_ptr<T[]> filled(std::size_t count, const T& value) {
-    auto out = std::make_unique_for_overwrite<T[]>(count);
+ScratchArray<T> filled(std::size_t count, const T& value) {
+    ScratchArray<T> out(count);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, std::size_t{1} << 16),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                           std::fill(out.get() + range.begin(), out.get() + range.end(), value);
@@ -436,7 +437,8 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     ProbeMap map(n, centre);
     const std::size_t texels = map.texel_count();
     const TexelAngleBounds& texel_angles = TexelAngleBounds::of(n);
-    const auto directions = std::make_unique_for_overwrite<glm::vec3[]>(texels);
+    // Scratch arrays come from the set's scope where there is one (bake_scratch.hpp).
+    const ScratchArray<glm::vec3> directions(texels);
     tbb::parallel_for(0, n, [&](int y) {
         for (int x = 0; x < n; ++x) {
             directions[oct::texel_index({x, y}, n)] = oct::texel_direction({x, y}, n);
@@ -468,10 +470,7 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     // within splat_plane_reach splat radii of the point (BakeSettings says why).
     // The splat's shape as the first pass found it, kept for the second when the points are
     // few enough (SplatShape): the direction's texel, the cone and the search radius.
-    std::unique_ptr<SplatShape[]> shapes;
-    if (count <= kMaxKeptShapes) {
-        shapes = std::make_unique_for_overwrite<SplatShape[]>(count);
-    }
+    const ScratchArray<SplatShape> shapes(count <= kMaxKeptShapes ? count : 0);
     auto for_each_splat_texel = [&](const BakePoint& b, std::size_t j, bool again, auto&& visit) {
         Surfel p;
         if (!surfel_of(b, p)) {
@@ -564,11 +563,9 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     // A scattered cut (Source::gather_whole) is copied out once for both passes and the resolve, in
     // parallel: its points bound the copy (about the probe's texels), where a whole cloud's
     // copy would grow with the cloud, so that one is copied a block at a time per pass.
-    std::unique_ptr<BakePoint[]> gathered;
-    if (source.gather_whole()) {
-        // Left unset until the copy writes it: zeroing first would touch every page on one
-        // thread.
-        gathered = std::make_unique_for_overwrite<BakePoint[]>(count);
+    // Left unset until the copy writes it: zeroing first would touch every page on one thread.
+    const ScratchArray<BakePoint> gathered(source.gather_whole() ? count : 0);
+    if (gathered) {
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, kGatherBlock),
                           [&](const tbb::blocked_range<std::size_t>& range) {
                               for (std::size_t j = range.begin(); j < range.end(); ++j) {

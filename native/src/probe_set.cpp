@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "lfprobe/bake_scratch.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/json_input.hpp"
 #include "lfprobe/probe_exr.hpp"
@@ -268,6 +269,8 @@ BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest
         BakeSummary summary;
         manifest.probes.clear();
         std::vector<StagedProbe> staged;
+        // One probe's scratch arrays serve the next (bake_scratch.hpp).
+        const BakeScratchScope scratch;
         for (std::size_t i = 0; i < count; ++i) {
             if (progress != nullptr) {
                 progress->throw_if_cancelled();
