@@ -13,6 +13,7 @@
 #include "lfprobe/image_exr.hpp"
 #include "lfprobe/mesh_reader.hpp"
 #include "lfprobe/probe_trace.hpp"
+#include "temp_folder.hpp"
 #include "test_data.hpp"
 
 namespace lfprobe {
@@ -21,9 +22,15 @@ namespace {
 const std::string kMeshes = lfprobe::testing::shared_data("meshes");
 
 // A closed box room [-2,2] × [-3,3] × [0,2.5], one object and one material per wall.
+// Each test writes its own copy: ctest runs the tests as processes side by side, and one
+// rewriting a shared file while another read it made the reader fail now and then.
+std::filesystem::path test_dir() {
+    return lfprobe::testing::fresh_dir(
+        "lfprobe_ground_truth_", ::testing::UnitTest::GetInstance()->current_test_info()->name());
+}
+
 std::string box_room_obj() {
-    const auto dir = std::filesystem::temp_directory_path() / "lfprobe_ground_truth_test";
-    std::filesystem::create_directories(dir);
+    const auto dir = test_dir();
     std::ofstream(dir / "room.mtl")
         << "newmtl floor\nKd 0.5 0.5 0.5\nnewmtl wall\nKd 0.2 0.4 0.6\n";
     std::ofstream(dir / "room.obj")
@@ -131,8 +138,7 @@ TEST(GroundTruth, ObjectChannelRoundTripsAndThroughput) {
     const EmbreeScene scene(mesh);
     const Camera cam = Camera::look_at({0.0, 0.0, 1.0}, {1.0, 2.0, 0.5}, 32, 24);
     const RenderedImage img = render_ground_truth(scene, cam);
-    const auto path =
-        (std::filesystem::temp_directory_path() / "lfprobe_ground_truth_test" / "gt.exr").string();
+    const auto path = (test_dir() / "gt.exr").string();
     write_rendered_exr(path, img);
     const RenderedImage back = read_rendered_exr(path);
     EXPECT_EQ(back.object, img.object);
