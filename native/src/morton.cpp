@@ -4,10 +4,11 @@
 #include <atomic>
 #include <limits>
 #include <utility>
+#include <vector>
 
 #include <glm/common.hpp>
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
 
 namespace lfprobe::morton {
 
@@ -38,6 +39,62 @@ struct KeyFrame {
         return key(cell(0), cell(1), cell(2));
     }
 };
+
+using Keyed = std::pair<std::uint64_t, std::uint32_t>;
+
+// Sorts (key, index) pairs: a counting sort on the keys' top bits into buckets, on all cores,
+// then each bucket sorted on its own (in cache, on the whole pair, so the order is the one a
+// comparison sort gives). tbb::parallel_sort of the whole array moved every pair through memory
+// about log n times: a tenth of the normals' estimate for 10 M points.
+void sort_keyed(std::vector<Keyed>& keyed) {
+    const std::size_t n = keyed.size();
+    constexpr int kBucketBits = 16;
+    constexpr std::size_t kBuckets = std::size_t{1} << kBucketBits;
+    constexpr int kShift = 3 * kBitsPerAxis - kBucketBits;
+    if (n < 4 * kBuckets) {
+        std::sort(keyed.begin(), keyed.end());
+        return;
+    }
+    // Chunks of the input, each counted and scattered by one task into its own share of each
+    // bucket (the chunks' shares follow in chunk order).
+    constexpr std::size_t kChunks = 16;
+    const std::size_t chunk_size = (n + kChunks - 1) / kChunks;
+    std::vector<std::uint32_t> offsets(kChunks * kBuckets, 0);
+    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
+        std::uint32_t* count = offsets.data() + c * kBuckets;
+        const std::size_t end = std::min(n, (c + 1) * chunk_size);
+        for (std::size_t i = c * chunk_size; i < end; ++i) {
+            ++count[keyed[i].first >> kShift];
+        }
+    });
+    std::vector<std::uint32_t> bucket_start(kBuckets + 1, 0);
+    std::uint32_t total = 0;
+    for (std::size_t b = 0; b < kBuckets; ++b) {
+        bucket_start[b] = total;
+        for (std::size_t c = 0; c < kChunks; ++c) {
+            const std::uint32_t count = offsets[c * kBuckets + b];
+            offsets[c * kBuckets + b] = total;
+            total += count;
+        }
+    }
+    bucket_start[kBuckets] = total;
+    std::vector<Keyed> out(n);
+    tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
+        std::uint32_t* next = offsets.data() + c * kBuckets;
+        const std::size_t end = std::min(n, (c + 1) * chunk_size);
+        for (std::size_t i = c * chunk_size; i < end; ++i) {
+            out[next[keyed[i].first >> kShift]++] = keyed[i];
+        }
+    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kBuckets, 256),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t b = range.begin(); b < range.end(); ++b) {
+                              std::sort(out.begin() + bucket_start[b],
+                                        out.begin() + bucket_start[b + 1]);
+                          }
+                      });
+    keyed = std::move(out);
+}
 
 } // namespace
 
@@ -83,11 +140,11 @@ SortedPoints sort_points(const std::vector<glm::vec3>& positions) {
     const KeyFrame frame(positions);
     sorted.origin = frame.origin;
     sorted.cube_size = frame.cube_size;
-    std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(n);
+    std::vector<Keyed> keyed(n);
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
         keyed[i] = {frame.key_of(positions[i]), static_cast<std::uint32_t>(i)};
     });
-    tbb::parallel_sort(keyed.begin(), keyed.end());
+    sort_keyed(keyed);
     sorted.keys.resize(n);
     sorted.order.resize(n);
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t j) {
