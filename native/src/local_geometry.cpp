@@ -1,6 +1,7 @@
 #include "lfprobe/local_geometry.hpp"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -92,6 +93,52 @@ void split_into_leaves(const std::vector<std::uint64_t>& keys, std::uint32_t beg
     }
 }
 
+// Calls visit(a, b) for each compare-exchange of Batcher's odd-even merge sort of n elements (n a
+// power of two), in order.
+template <class Visit>
+constexpr void for_each_batcher_pair(std::size_t n, Visit&& visit) {
+    for (std::size_t p = 1; p < n; p <<= 1) {
+        for (std::size_t k = p; k >= 1; k >>= 1) {
+            for (std::size_t j = k % p; j + k < n; j += 2 * k) {
+                for (std::size_t i = 0; i < std::min(k, n - j - k); ++i) {
+                    if ((i + j) / (2 * p) == (i + j + k) / (2 * p)) {
+                        visit(i + j, i + j + k);
+                    }
+                }
+            }
+        }
+    }
+}
+
+// That sort as a fixed sequence of compare-exchanges: no branch on the data.
+template <std::size_t N>
+struct SortingNetwork {
+    static constexpr std::size_t kPairs = [] {
+        std::size_t pairs = 0;
+        for_each_batcher_pair(N, [&](std::size_t, std::size_t) { ++pairs; });
+        return pairs;
+    }();
+    static constexpr std::array<std::pair<std::uint8_t, std::uint8_t>, kPairs> kComparators = [] {
+        std::array<std::pair<std::uint8_t, std::uint8_t>, kPairs> out{};
+        std::size_t at = 0;
+        for_each_batcher_pair(N, [&](std::size_t a, std::size_t b) {
+            out[at++] = {static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(b)};
+        });
+        return out;
+    }();
+
+    // Sorts v[0, N) ascending.
+    static void sort(std::uint64_t* v) {
+#pragma GCC unroll 256
+        for (std::size_t c = 0; c < kPairs; ++c) {
+            const std::uint64_t a = v[kComparators[c].first];
+            const std::uint64_t b = v[kComparators[c].second];
+            v[kComparators[c].first] = a < b ? a : b;
+            v[kComparators[c].second] = a < b ? b : a;
+        }
+    }
+};
+
 // The k nearest sorted points to one query, ascending by (squared distance, sorted index):
 // ties go to the smaller index, so the set and its order do not depend on the order the
 // candidates are offered in. A candidate is one 64-bit key, the distance's bits above the
@@ -117,13 +164,27 @@ public:
         return count;
     }
 
-    // Keeps the k smallest of the `count` collected keys (all of them when fewer), sorted: each
-    // inserted into a sorted run at the front of `scratch` (where it has been read already), or
-    // turned away at one comparison once the run holds k and the key is past its last. The
-    // candidates come nearest cells first, so most are turned away; a selection
-    // (nth_element) and a sort cost more than these insertions on the 25 or so a query collects.
+    // Keeps the k smallest of the `count` collected keys (all of them when fewer), sorted. Up to
+    // 32 keys (nine queries in ten collect 8 to 31) go through a sorting network, padded with
+    // the largest key: its compare-exchanges branch on nothing, where inserting each key into
+    // a sorted run mispredicted where the run ended, a quarter of the estimate's time. More
+    // keys (a second search without a limit) are each inserted into a sorted run at the front
+    // of `scratch` (where it has been read already), or turned away at one comparison once
+    // the run holds k and the key is past its last. The keys are distinct (their indices
+    // differ), so both give the same k keys in the same order.
     void settle(std::uint64_t* scratch, std::size_t count) {
         const std::size_t kept = std::min(count, capacity_);
+        if (count <= 32) {
+            std::uint64_t v[32];
+            std::fill(std::copy(scratch, scratch + count, v), v + 32, ~std::uint64_t{0});
+            if (count <= 16) {
+                SortingNetwork<16>::sort(v);
+            } else {
+                SortingNetwork<32>::sort(v);
+            }
+            keys_.assign(v, v + kept);
+            return;
+        }
         std::size_t size = 0;
         for (std::size_t q = 0; q < count; ++q) {
             const std::uint64_t key = scratch[q];
@@ -185,11 +246,10 @@ public:
                             glm::any(glm::greaterThanEqual(c, glm::i64vec3(cells)))) {
                             continue; // outside the cube: no points there
                         }
-                        const auto [b, e] = cell_run(sorted_.keys,
-                                                     morton::key(static_cast<std::uint64_t>(c.x),
-                                                                 static_cast<std::uint64_t>(c.y),
-                                                                 static_cast<std::uint64_t>(c.z)),
-                                                     shift, hint);
+                        const auto [b, e] = run_of(morton::key(static_cast<std::uint64_t>(c.x),
+                                                               static_cast<std::uint64_t>(c.y),
+                                                               static_cast<std::uint64_t>(c.z)),
+                                                   shift, hint);
                         if (b < e) {
                             runs_.push_back({b, e, glm::i8vec3(dx, dy, dz)});
                         }
@@ -199,6 +259,21 @@ public:
         }
         block_cell_ = cell;
         block_shift_ = shift;
+    }
+
+    // The sorted points of cell `cell_key` at level `shift`, remembered: the next leaf along the
+    // curve is mostly the same size and beside this one, so its block shares most cells with
+    // this one's, and their runs were searched for already (each a pair of galloping searches,
+    // a tenth of the estimate).
+    std::pair<std::uint32_t, std::uint32_t> run_of(std::uint64_t cell_key, int shift,
+                                                   std::uint32_t hint) {
+        KnownRun& known =
+            known_runs_[((cell_key * 0x9E3779B97F4A7C15ull) >> 58) ^ static_cast<unsigned>(shift)];
+        if (known.shift != shift || known.cell_key != cell_key) {
+            const auto [b, e] = cell_run(sorted_.keys, cell_key, shift, hint);
+            known = {cell_key, shift, b, e};
+        }
+        return {known.begin, known.end};
     }
 
     // The k nearest of the sorted point `j` within the gathered block, of those within `limit`
@@ -295,6 +370,13 @@ private:
     const std::vector<glm::vec3>& positions_;
     std::vector<Run> runs_;
     std::vector<std::uint64_t> scratch_; // the candidates of one search
+    struct KnownRun {
+        std::uint64_t cell_key = 0;
+        int shift = -1; // none yet
+        std::uint32_t begin = 0;
+        std::uint32_t end = 0;
+    };
+    std::array<KnownRun, 64> known_runs_{}; // by a hash of the cell (run_of)
     glm::u64vec3 block_cell_{0};
     int block_shift_ = -1;
 };
