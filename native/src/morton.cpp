@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <limits>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -40,19 +41,32 @@ struct KeyFrame {
     }
 };
 
-using Keyed = std::pair<std::uint64_t, std::uint32_t>;
+// A point's key and index. Plain data (a std::pair zeroes itself when made), so that the sort's
+// buffers are left unset until written on all cores: zeroing 160 MB on one thread first took
+// as long as the sort's counting.
+struct Keyed {
+    std::uint64_t key;
+    std::uint32_t index;
+    friend bool operator<(const Keyed& a, const Keyed& b) {
+        return a.key < b.key || (a.key == b.key && a.index < b.index);
+    }
+};
 
-// Sorts (key, index) pairs: a counting sort on the keys' top bits into buckets, on all cores,
-// then each bucket sorted on its own (in cache, on the whole pair, so the order is the one a
-// comparison sort gives). tbb::parallel_sort of the whole array moved every pair through memory
-// about log n times: a tenth of the normals' estimate for 10 M points.
-void sort_keyed(std::vector<Keyed>& keyed) {
-    const std::size_t n = keyed.size();
+// `n` pairs, unset.
+std::unique_ptr<Keyed[]> keyed_buffer(std::size_t n) {
+    return std::make_unique_for_overwrite<Keyed[]>(n);
+}
+
+// Sorts the `n` pairs of `keyed`: a counting sort on the keys' top bits into buckets, on all
+// cores, then each bucket sorted on its own (in cache, on the whole pair, so the order is the
+// one a comparison sort gives). tbb::parallel_sort of the whole array moved every pair through
+// memory about log n times: a tenth of the normals' estimate for 10 M points.
+void sort_keyed(std::unique_ptr<Keyed[]>& keyed, std::size_t n) {
     constexpr int kBucketBits = 16;
     constexpr std::size_t kBuckets = std::size_t{1} << kBucketBits;
     constexpr int kShift = 3 * kBitsPerAxis - kBucketBits;
     if (n < 4 * kBuckets) {
-        std::sort(keyed.begin(), keyed.end());
+        std::sort(keyed.get(), keyed.get() + n);
         return;
     }
     // Chunks of the input, each counted and scattered by one task into its own share of each
@@ -64,7 +78,7 @@ void sort_keyed(std::vector<Keyed>& keyed) {
         std::uint32_t* count = offsets.data() + c * kBuckets;
         const std::size_t end = std::min(n, (c + 1) * chunk_size);
         for (std::size_t i = c * chunk_size; i < end; ++i) {
-            ++count[keyed[i].first >> kShift];
+            ++count[keyed[i].key >> kShift];
         }
     });
     std::vector<std::uint32_t> bucket_start(kBuckets + 1, 0);
@@ -78,19 +92,19 @@ void sort_keyed(std::vector<Keyed>& keyed) {
         }
     }
     bucket_start[kBuckets] = total;
-    std::vector<Keyed> out(n);
+    std::unique_ptr<Keyed[]> out = keyed_buffer(n);
     tbb::parallel_for(std::size_t{0}, kChunks, [&](std::size_t c) {
         std::uint32_t* next = offsets.data() + c * kBuckets;
         const std::size_t end = std::min(n, (c + 1) * chunk_size);
         for (std::size_t i = c * chunk_size; i < end; ++i) {
-            out[next[keyed[i].first >> kShift]++] = keyed[i];
+            out[next[keyed[i].key >> kShift]++] = keyed[i];
         }
     });
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, kBuckets, 256),
                       [&](const tbb::blocked_range<std::size_t>& range) {
                           for (std::size_t b = range.begin(); b < range.end(); ++b) {
-                              std::sort(out.begin() + bucket_start[b],
-                                        out.begin() + bucket_start[b + 1]);
+                              std::sort(out.get() + bucket_start[b],
+                                        out.get() + bucket_start[b + 1]);
                           }
                       });
     keyed = std::move(out);
@@ -140,16 +154,16 @@ SortedPoints sort_points(const std::vector<glm::vec3>& positions) {
     const KeyFrame frame(positions);
     sorted.origin = frame.origin;
     sorted.cube_size = frame.cube_size;
-    std::vector<Keyed> keyed(n);
+    std::unique_ptr<Keyed[]> keyed = keyed_buffer(n);
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) {
         keyed[i] = {frame.key_of(positions[i]), static_cast<std::uint32_t>(i)};
     });
-    sort_keyed(keyed);
+    sort_keyed(keyed, n);
     sorted.keys.resize(n);
     sorted.order.resize(n);
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t j) {
-        sorted.keys[j] = keyed[j].first;
-        sorted.order[j] = keyed[j].second;
+        sorted.keys[j] = keyed[j].key;
+        sorted.order[j] = keyed[j].index;
     });
     return sorted;
 }
