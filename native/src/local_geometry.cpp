@@ -206,6 +206,7 @@ public:
     }
 
     [[nodiscard]] std::size_t size() const { return keys_.size(); }
+    [[nodiscard]] std::size_t capacity() const { return capacity_; }
     [[nodiscard]] bool full() const { return keys_.size() == capacity_; }
     [[nodiscard]] float d2(std::size_t q) const {
         return std::bit_cast<float>(static_cast<std::uint32_t>(keys_[q] >> 32));
@@ -310,11 +311,19 @@ public:
 
     // The k nearest within the block, at first within `guess` (squared; the previous query's
     // k-th, widened), which turns most candidates away before they are kept; when fewer than k
-    // lie within it, again without a limit.
+    // lie within it, again within a limit widened for the shortfall, and at last without one.
     void search_from_guess(std::uint32_t j, NearestSet& nearest, float guess) {
         search(j, nearest, guess);
         if (!nearest.full()) {
-            search(j, nearest, std::numeric_limits<float>::infinity());
+            // Found f < k: on a surface the k lie within k / f times the area, so within that
+            // many times the squared guess (and half again, as the guess had): about 1.5 k
+            // candidates again. Without a limit a second search took in 120 on average, one
+            // query in twenty, and a fifth of all candidates.
+            const float found = static_cast<float>(std::max<std::size_t>(nearest.size(), 1));
+            search(j, nearest, guess * 1.5f * static_cast<float>(nearest.capacity()) / found);
+            if (!nearest.full()) {
+                search(j, nearest, std::numeric_limits<float>::infinity());
+            }
         }
     }
 
