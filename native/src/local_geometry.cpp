@@ -270,7 +270,7 @@ public:
     std::pair<std::uint32_t, std::uint32_t> run_of(std::uint64_t cell_key, int shift,
                                                    std::uint32_t hint) {
         KnownRun& known =
-            known_runs_[((cell_key * 0x9E3779B97F4A7C15ull) >> 58) ^ static_cast<unsigned>(shift)];
+            known_runs_[((cell_key * 0x9E3779B97F4A7C15ull) >> 56) ^ static_cast<unsigned>(shift)];
         if (known.shift != shift || known.cell_key != cell_key) {
             const auto [b, e] = cell_run(sorted_.keys, cell_key, shift, hint);
             known = {cell_key, shift, b, e};
@@ -386,7 +386,7 @@ private:
         std::uint32_t begin = 0;
         std::uint32_t end = 0;
     };
-    std::array<KnownRun, 64> known_runs_{}; // by a hash of the cell (run_of)
+    std::array<KnownRun, 256> known_runs_{}; // by a hash of the cell (run_of)
     glm::u64vec3 block_cell_{0};
     int block_shift_ = -1;
 };
