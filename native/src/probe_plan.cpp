@@ -42,11 +42,12 @@ ProbeClassification quick_classify(const PointCloud& cloud, const LocalGeometry&
     BakeSettings quick = settings.bake;
     quick.resolution = settings.classify_resolution;
     quick.face_the_probe = false; // back faces are how a probe inside geometry shows
-    if (hierarchy != nullptr && !hierarchy->levels.empty() && quick.lod_texels > 0.0f) {
-        return classify_probe(bake_probe_from_hierarchy(cloud, geometry, *hierarchy, at, quick),
-                              classes);
-    }
-    return classify_probe(bake_probe_from_cloud(cloud, geometry, at, quick), classes);
+    // bake_probe_from_hierarchy itself bakes every point where the hierarchy has no levels or
+    // lod_texels is 0.
+    return classify_probe(hierarchy != nullptr
+                              ? bake_probe_from_hierarchy(cloud, geometry, *hierarchy, at, quick)
+                              : bake_probe_from_cloud(cloud, geometry, at, quick),
+                          classes);
 }
 
 // A map of `n`² texels that holds no data: a trace over it answers UNKNOWN at once.
