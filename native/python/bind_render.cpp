@@ -281,7 +281,7 @@ void bind_render(py::module_& m) {
     m.def(
         "start_splat",
         [](std::shared_ptr<PointCloud> cloud, const std::string& camera, const std::string& output,
-           double radius_scale, double fixed_radius, int threads) {
+           double radius_scale, double fixed_radius, int threads, const std::string& cache_dir) {
             const Camera cam = camera_from(camera);
             SplatSettings settings;
             settings.radius_scale = radius_scale;
@@ -290,8 +290,8 @@ void bind_render(py::module_& m) {
             auto work = [=](Progress& progress) {
                 return on_threads(threads, [&] {
                     double geometry_seconds = 0.0;
-                    const SplatStats stats = splat_cloud_to_exr(*cloud, cam, settings, output,
-                                                                &progress, &geometry_seconds);
+                    const SplatStats stats = splat_cloud_to_exr(
+                        *cloud, cam, settings, output, &progress, &geometry_seconds, cache_dir);
                     return Result{stats, geometry_seconds};
                 });
             };
@@ -301,9 +301,11 @@ void bind_render(py::module_& m) {
                     [](Result&& r) -> py::object { return splat_stats_dict(r.first, r.second); }));
         },
         py::arg("cloud"), py::arg("camera"), py::arg("output"), py::arg("radius_scale") = 0.8,
-        py::arg("fixed_radius") = 0.0, py::arg("threads") = 0,
+        py::arg("fixed_radius") = 0.0, py::arg("threads") = 0, py::arg("cache_dir") = "",
         "Start drawing the cloud as z-buffered splats (sized by the local spacing, or "
-        "fixed_radius metres when > 0) into the EXR `output`; the Job's result is the stats.");
+        "fixed_radius metres when > 0) into the EXR `output`; the Job's result is the stats. "
+        "cache_dir: the prepared-cloud cache a bake of the cloud reads and writes; the local "
+        "spacing is read from it when there, and cached there when estimated (\"\": none).");
 
     m.def(
         "read_image",

@@ -167,3 +167,39 @@ TEST(Splat, CameraFileToExr) {
     EXPECT_EQ(m.at("stats").at("covered"), 32u * 24u);
     std::filesystem::remove_all(folder);
 }
+
+// Splatting one cloud from several cameras estimates its local spacing once: the first splat
+// caches it, the next ones read it and draw the same image bit for bit.
+TEST(Splat, SpacingIsEstimatedOnceAndReadFromTheCacheAfter) {
+    const BoxRoomScene scene;
+    const PointCloud cloud = scene.cloud(0.05f, glm::dvec3(0.0, 0.0, 1.2));
+    const std::filesystem::path folder =
+        std::filesystem::temp_directory_path() /
+        ("lfprobe_splat_cache_test_" + std::to_string(std::random_device{}()));
+    const std::filesystem::path cache = folder / "cache";
+    std::filesystem::create_directories(folder);
+    const Camera camera = Camera::look_at({0.0, 0.0, 1.2}, {1.0, 0.2, 1.0}, 32, 24, 20.0);
+    const std::string uncached = (folder / "uncached.exr").string();
+    (void)splat_cloud_to_exr(cloud, camera, {}, uncached);
+    EXPECT_FALSE(std::filesystem::exists(cache));
+
+    (void)splat_cloud_to_exr(cloud, camera, {}, (folder / "first.exr").string(), nullptr, nullptr,
+                             cache.string());
+    std::vector<std::filesystem::path> entries;
+    for (const auto& entry : std::filesystem::directory_iterator(cache)) {
+        entries.push_back(entry.path());
+    }
+    ASSERT_EQ(entries.size(), 1u);
+    const auto written = std::filesystem::last_write_time(entries[0]);
+    (void)splat_cloud_to_exr(cloud, camera, {}, (folder / "second.exr").string(), nullptr, nullptr,
+                             cache.string());
+    EXPECT_EQ(std::filesystem::last_write_time(entries[0]), written); // read, not rewritten
+
+    const RenderedImage reference = read_rendered_exr(uncached);
+    for (const char* name : {"first.exr", "second.exr"}) {
+        const RenderedImage image = read_rendered_exr((folder / name).string());
+        EXPECT_EQ(image.rgba, reference.rgba) << name;
+        EXPECT_EQ(image.depth, reference.depth) << name;
+    }
+    std::filesystem::remove_all(folder);
+}

@@ -51,13 +51,16 @@ struct SplatStats {
                                           Progress* progress = nullptr,
                                           SplatStats* stats = nullptr);
 
-// The splat render every caller runs: estimates the local geometry that sizes the splats
-// (unless settings.fixed_radius > 0), renders and writes the EXR to `output_path`
-// (atomically) with the one metadata layout (image_metadata.hpp). Returns the stats; the
-// geometry estimate's time goes to `geometry_seconds` when given.
+// The splat render every caller runs: takes the local geometry that sizes the splats (unless
+// settings.fixed_radius > 0) from the prepared-cloud cache in `cache_dir` when a bake or an
+// earlier splat of the same cloud left it there, estimates and caches it otherwise ("": no
+// cache), renders and writes the EXR to `output_path` (atomically) with the one metadata
+// layout (image_metadata.hpp). Returns the stats; the geometry's time (estimate or cache read)
+// goes to `geometry_seconds` when given.
 SplatStats splat_cloud_to_exr(const PointCloud& cloud, const Camera& camera,
                               const SplatSettings& settings, const std::string& output_path,
-                              Progress* progress = nullptr, double* geometry_seconds = nullptr);
+                              Progress* progress = nullptr, double* geometry_seconds = nullptr,
+                              const std::string& cache_dir = "");
 
 // The settings as JSON (for metadata and reports).
 [[nodiscard]] nlohmann::json splat_settings_json(const SplatSettings& settings);

@@ -224,8 +224,11 @@ def _cmd_splat(args) -> int:
     progress = None if args.quiet else TerminalProgress()
     cloud = load_scans(args.scan, triples(args.scanner, "--scanner"), args.columns or "",
                        "" if args.no_cache else args.cache, progress=progress)
+    # The cache that holds the parsed scans also holds their local spacing once a bake or a
+    # splat has estimated it.
     job = _native.start_splat(cloud, args.camera, args.out, radius_scale=args.radius_scale,
-                              fixed_radius=args.fixed_radius, threads=args.threads)
+                              fixed_radius=args.fixed_radius, threads=args.threads,
+                              cache_dir="" if args.no_cache else args.cache)
     stats = job.run(progress)
     camera = json.load(open(args.camera, encoding="utf-8"))
     pixels = camera["resolution"][0] * camera["resolution"][1]
