@@ -2,7 +2,8 @@
 # The demo, from a fresh clone on Debian 12: installs and builds what is missing (tools/setup.sh),
 # builds the lab room scene if it is missing (Blender headless when Blender is installed, since
 # it also writes blend/lab_room.blend; the bpy-free generator otherwise), then runs the report
-# on it: four simulated scans of the room, probe grids baked from them, views at a probe,
+# on it: four simulated scans of the room at the paper's density (0.1°, 21.6 M points; and at 1°),
+# probe grids baked from them, views (640 pixels wide) at a probe,
 # between probes, near a wall and along a walk rendered by tracing the probes and by Embree
 # (ground truth), compared, and written to out/demo/report.html with the images under
 # out/demo/images/. Progress and the time of every step go to the terminal.
@@ -63,10 +64,10 @@ if command -v blender >/dev/null 2>&1; then
   bdir="$out/blender"
   mkdir -p "$bdir/scans"
   i=0
-  # The scene file's four scanner positions, at the report's finest step (0.25°).
+  # The scene file's four scanner positions, at the report's finest step (0.1°, 5.4 M points each).
   while read -r x y z; do
     i=$((i + 1))
-    ./lfprobe scan --mesh blend/lab_room/lab_room.obj --at "$x" "$y" "$z" --step-deg 0.25 \
+    ./lfprobe scan --mesh blend/lab_room/lab_room.obj --at "$x" "$y" "$z" --step-deg 0.1 \
       --noise-mm 1 --out "$bdir/scans/scan_$i.xyz" --quiet
   done < <(/usr/bin/python3 -c "import json,sys; [print(*p) for p in json.load(open(sys.argv[1]))['scanners']]" "$scene_json")
   batch() { blender -b --factory-startup --python-exit-code 1 -P addon/lfprobe/cli.py -- --open "$1" "${@:2}" 2>&1 | grep '^lfprobe' || { echo "demo: the Blender step '$2' failed" >&2; exit 1; }; }

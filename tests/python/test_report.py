@@ -202,6 +202,33 @@ def test_planning_section_compares_auto_adaptive_and_bytes_per_probe(tiny_report
     assert {"planning_walk_holes.png", "planning_walk_psnr.png"} <= images
 
 
+def test_a_preset_without_the_planning_section_says_so_on_the_page(tiny_report):
+    """The demo preset skips "Model only what a scene needs" (minutes at the paper's density):
+    the page keeps the section with a note naming the preset that runs it, and lists no
+    planning files."""
+    from lfprobe.core.report.page import render_page
+    from lfprobe.core.report.presets import get_preset
+
+    assert not get_preset("demo").planning and get_preset("full").planning and get_preset("tiny").planning
+    _, data, _ = tiny_report
+    page = render_page(dict(data, planning=None, preset="demo"), {})
+    section = page[page.index('id="planning"'):]
+    assert "Not run by the preset &#x27;demo&#x27;" in section and "--preset full" in section
+    assert "planning_walk.csv" not in page
+
+
+def test_a_run_without_the_planning_section_leaves_no_planning_file_of_an_earlier_run(tiny_report, tmp_path):
+    from lfprobe.core.report.runner import PLANNING_TABLES, _write_tables
+
+    _, data, _ = tiny_report
+    for name in PLANNING_TABLES:
+        (tmp_path / name).write_text("from an earlier run\n")
+    _write_tables(str(tmp_path), dict(data, planning=None))
+    written = set(os.listdir(tmp_path))
+    assert not written & set(PLANNING_TABLES)
+    assert {"sweep.csv", "peers.csv", "distance.csv"} <= written
+
+
 def test_findings_quote_the_measured_figures(tiny_report):
     _, data, result = tiny_report
     first = sorted((r for r in data["at_probe"]

@@ -19,7 +19,8 @@ th { background: #f0f0f0; } td.l, th.l { text-align: left; }
 tr.front td { background: #fff4cc; }
 .pass { color: #060; font-weight: bold; } .fail { color: #a00; font-weight: bold; }
 .note { color: #555; font-size: 13px; } .finding { background: #eef5ff; padding: .4em .8em; border-left: 4px solid #48c; }
-figure { display: inline-block; margin: .4em 1em .8em 0; vertical-align: top; }
+figure { display: inline-block; margin: .4em 1em .8em 0; vertical-align: top; max-width: 100%; }
+img { max-width: 100%; height: auto; }
 figcaption { font-size: 12px; color: #444; max-width: 760px; }
 img.px { image-rendering: pixelated; }
 nav a { margin-right: 1em; font-size: 13px; }

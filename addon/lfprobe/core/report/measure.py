@@ -44,6 +44,9 @@ class RunContext:
         self.preset = preset
         self.out_dir = os.path.abspath(out_dir)
         self.work_dir = os.path.join(self.out_dir, "work")
+        # The prepared-cloud cache of this run's clouds: each cloud's normals, spacing and point
+        # hierarchy are computed by its first bake (or splat) and read by the others.
+        self.cache_dir = os.path.join(self.work_dir, "prepared")
         self.images_dir = os.path.join(self.out_dir, "images")
         self.threads = int(threads)
         self.log = log

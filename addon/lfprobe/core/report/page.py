@@ -250,15 +250,22 @@ def _stability_section(page, data: Dict[str, object]) -> None:
             page.add(table(case["series"], [("epsilon_m", "ε m", num(".0e")),
                                             ("status_differs", "pixels changing status", num(".3%")),
                                             ("psnr_vs_lookup", "PSNR dB vs lookup", num(".2f"))]))
+    planning_files = (", planning_resolution.csv, planning_walk.csv, planning_storage.csv, planning_iterations.csv"
+                      if data.get("planning") is not None else "")
     page.paragraph("Raw figures: report.json, sweep.csv, sweep_views.csv, distance.csv, walk.csv, at_probe.csv, "
-                   "peers.csv, stability.csv, ground_truth.csv, planning_resolution.csv, planning_walk.csv, planning_storage.csv, "
-                   "planning_iterations.csv beside this file; images in images/.", "note")
+                   f"peers.csv, stability.csv, ground_truth.csv{planning_files} beside this file; images in images/.",
+                   "note")
 
 
 def _planning_section(page, data: Dict[str, object], img) -> None:
     plan = data["planning"]
-    r, pl, eq = plan["resolution"], plan["placement"], plan["bytes_at_equal_error"]
     page.section("planning", "Model only what a scene needs")
+    if plan is None:
+        page.paragraph(f"Not run by the preset '{data['preset']}': its two planned bakes of the scene grid (up to "
+                       "4096² a probe) and the adaptive placement take minutes at this scan density. "
+                       "`lfprobe report --preset full` runs it.", "note")
+        return
+    r, pl, eq = plan["resolution"], plan["placement"], plan["bytes_at_equal_error"]
     page.paragraph("Automatic resolution: the scene grid baked from the densest scan with bake --auto (each probe "
                    "at the resolution its points support: two texels per point spacing, N ≈ 2·sqrt(4π)·r/s at the "
                    "median direction, rounded down to a power of two or the half between, between 64² and 4096²; "

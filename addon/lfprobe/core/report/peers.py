@@ -28,7 +28,8 @@ def splat_rows(ctx: RunContext, density) -> Tuple[List[Dict[str, object]], Dict[
         path = ctx.work_path("peers", f"splat_{view.name}.exr")
         best = None
         for _ in range(ctx.preset.timing_repeats):
-            stats = ctx.native.start_splat(density.cloud, json.dumps(big), path, threads=ctx.threads).run()
+            stats = ctx.native.start_splat(density.cloud, json.dumps(big), path, threads=ctx.threads,
+                                           cache_dir=ctx.cache_dir).run()
             if best is None or stats["seconds"] < best["seconds"]:
                 best = stats
         image = downsample(ctx.native.read_image(path), n)

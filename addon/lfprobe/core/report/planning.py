@@ -87,7 +87,8 @@ def _auto_rows(ctx: RunContext, sweep: Sweep) -> List[Dict[str, object]]:
                                  ("auto", {}, ("full", "compact"))):
         folder = ctx.work_path("planning", name)
         start = time.perf_counter()
-        summary = pipeline.bake_from_cloud(densest.cloud, folder, placement, BakeOptions(plan=plan, storage="compact"))
+        summary = pipeline.bake_from_cloud(densest.cloud, folder, placement, BakeOptions(plan=plan, storage="compact"),
+                                           cache_dir=ctx.cache_dir)
         wall = time.perf_counter() - start
         for storage in storages:
             row = _auto_row(ctx, folder, summary, wall, storage)
@@ -246,7 +247,7 @@ def placement_comparison(ctx: RunContext, sweep: Sweep, fixed: List[Dict[str, ob
     uniform_folder = ctx.work_path("planning", "uniform")
     summary = pipeline.bake_from_cloud(densest.cloud, uniform_folder,
                                        ProbePlacementSpec(grid_min=lo, grid_max=hi, counts=counts),
-                                       BakeOptions(resolution=resolution))
+                                       BakeOptions(resolution=resolution), cache_dir=ctx.cache_dir)
     uniform_field = ctx.native.ProbeField.load(uniform_folder)
     uniform_positions = grid_positions(lo, hi, counts)
     rows += _walk_rows(ctx, uniform_field, "uniform grid", evaluation, placed_for, uniform_positions,

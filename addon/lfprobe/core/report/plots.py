@@ -57,6 +57,11 @@ def speed_vs_error(rows: Sequence[Dict[str, object]], cost: str, metric: str, ti
         axes.plot(xs, ys, color="black", linewidth=1.0, zorder=0)
         axes.scatter(xs, ys, facecolors="none", edgecolors="black", s=110, linewidths=1.2, label="Pareto front (scan-baked)")
     axes.set_xscale("log")
+    # Plain numbers at 1, 2, 3 and 5 of each decade: a range under a decade otherwise labels
+    # every minor tick in scientific notation, one over the other.
+    axes.xaxis.set_minor_locator(matplotlib.ticker.LogLocator(subs=(2.0, 3.0, 5.0)))
+    for formatter in (axes.xaxis.set_major_formatter, axes.xaxis.set_minor_formatter):
+        formatter(matplotlib.ticker.FuncFormatter(lambda value, _: f"{value:g}"))
     axes.set_xlabel(cost_axis[0])
     axes.set_ylabel(label)
     axes.set_title(title, fontsize=10)

@@ -1,5 +1,7 @@
-"""What each report preset sweeps. `tiny` runs in the tests (well under a minute), `demo` is
-the demo's report (a few minutes on 2 cores for a room), `full` is the benchmark sweep."""
+"""What each report preset sweeps. `tiny` runs in the tests (well under a minute); `demo` is the
+demo's report at the paper's scan density (scans at 0.1°, views 640 pixels wide, probes up to
+2048²: about 13 minutes on 2 cores for the lab room), measuring few settings; `full` is the benchmark
+sweep (every setting, and the section "Model only what a scene needs")."""
 
 from __future__ import annotations
 
@@ -76,6 +78,15 @@ class Preset:
     # The fine resolution of the reference setting (every trace variant, the images, the
     # peers' comparison); None: the middle of fine_resolutions.
     reference_resolution: Optional[int] = None
+    # Fine resolutions of the sweep's mesh-baked grids; None: fine_resolutions.
+    mesh_grid_resolutions: Optional[List[int]] = None
+    # Scans coarser than the densest are baked at the reference resolution only.
+    coarse_scans_at_reference_only: bool = False
+    # Frames of the walk the sweep renders; None: the scene's own count.
+    walk_frames: Optional[int] = None
+    # Whether the report runs its section "Model only what a scene needs" (two planned bakes of
+    # the scene grid at up to 4096² and an adaptive placement: minutes at the paper's density).
+    planning: bool = True
 
     def middle_fine_resolution(self) -> int:
         return self.fine_resolutions[len(self.fine_resolutions) // 2]
@@ -93,17 +104,18 @@ PRESETS = {
                    distance_fractions=[0.0, 0.1, 0.3, 0.6, 1.0], timing_repeats=1,
                    poisson_depth=6, stability_resolution=64, planning_max_added=3,
                    reference_spp=16, mesh_supersample=1),
-    "demo": Preset("demo", max_view_width=256, gt_spp=16, scan_step_factors=[1.0, 4.0],
-                   min_scan_step_deg=0.25, fine_resolutions=[256, 512, 1024],
-                   count_factors=[0.5, 1.0],
-                   # Without coarse levels a trace costs 5× as much for the same image: the
-                   # full preset measures it.
-                   trace_variants=[t for t in TRACE_VARIANTS if t[0] != "no coarse levels"],
-                   mesh_resolutions=[256, 512, 1024, 2048],
-                   distance_fractions=[0.0, 0.1, 0.3, 0.6, 1.0],
-                   timing_repeats=2, poisson_depth=8, stability_resolution=256,
-                   # At 0.25° a 512² probe, not the scan, limits the picture.
-                   reference_resolution=1024),
+    # The paper's density: four scans at 0.1° (21.6 M points in the lab room), views 640 pixels
+    # wide, the reference grid at 2048². Each setting costs a bake of up to 100 s and 16 M rays of
+    # rendering, so the demo measures few: the 1° scans beside the 0.1° ones, two resolutions, the
+    # trace variants that change the picture most; `full` measures the rest.
+    "demo": Preset("demo", max_view_width=640, gt_spp=16, scan_step_factors=[0.4, 4.0],
+                   min_scan_step_deg=0.1, fine_resolutions=[1024, 2048], count_factors=[1.0],
+                   trace_variants=[TRACE_VARIANTS[0], TRACE_VARIANTS[3], TRACE_VARIANTS[-1]],
+                   mesh_resolutions=[1024, 2048], distance_fractions=[0.0, 1.0],
+                   timing_repeats=1, poisson_depth=9, stability_resolution=256,
+                   bake_variants=["splat + fill"], reference_spp=64,
+                   reference_resolution=2048, mesh_grid_resolutions=[1024],
+                   coarse_scans_at_reference_only=True, walk_frames=6, planning=False),
     "full": Preset("full", max_view_width=None, gt_spp=16, scan_step_factors=[1.0, 2.0, 4.0],
                    min_scan_step_deg=0.05, fine_resolutions=[256, 512, 1024, 2048, 3072, 4096],
                    count_factors=[0.5, 1.0, 2.0], trace_variants=TRACE_VARIANTS,

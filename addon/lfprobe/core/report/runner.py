@@ -18,6 +18,11 @@ from .presets import DEFAULT_TRACE, get_preset
 from .scene import load_scene
 from .sweep import Sweep, aggregate, pareto_front
 
+# What the section "Model only what a scene needs" writes beside report.html.
+PLANNING_TABLES = ("planning_resolution.csv", "planning_walk.csv", "planning_storage.csv", "planning_iterations.csv")
+PLANNING_IMAGES = ("planning_walk_holes.png", "planning_walk_psnr.png")
+
+
 def _finite(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
 
@@ -41,10 +46,10 @@ def run_report(scene_path: str, out_dir: str, preset_name: str = "demo", threads
         splat_rows, splat_images = peers.splat_rows(ctx, densest)
         poisson_rows, poisson_images, poisson_info = peers.poisson_rows(ctx, densest)
         stability_cases = stability.run(ctx)
-        planning_data = planning.run(ctx, sweep)
+        planning_data = planning.run(ctx, sweep) if ctx.preset.planning else None
         data = _report_data(ctx, sweep, splat_rows, poisson_rows, poisson_info, stability_cases)
         data["planning"] = planning_data
-        data["findings"]["planning"] = planning.findings(planning_data)
+        data["findings"]["planning"] = planning.findings(planning_data) if planning_data else []
         data["started"] = started.isoformat(timespec="seconds")
         data["seconds"] = time.perf_counter() - start
         pngs = _write_images(ctx, sweep, data, splat_images, poisson_images)
@@ -220,6 +225,11 @@ def _write_tables(out_dir: str, data: Dict[str, object]) -> None:
     files.write_csv(os.path.join(out_dir, "ground_truth.csv"), data["ground_truth"])
     files.write_csv(os.path.join(out_dir, "trace_against_embree.csv"), data["trace_against_embree"])
     plan = data["planning"]
+    if plan is None:  # the preset does not run the planning section: none left from a run that did
+        for name in PLANNING_TABLES:
+            if os.path.exists(os.path.join(out_dir, name)):
+                os.remove(os.path.join(out_dir, name))
+        return
     files.write_csv(os.path.join(out_dir, "planning_resolution.csv"), plan["resolution"]["rows"])
     files.write_csv(os.path.join(out_dir, "planning_walk.csv"), plan["placement_frames"])
     files.write_csv(os.path.join(out_dir, "planning_storage.csv"), plan.get("storage", []))
@@ -252,10 +262,15 @@ def _write_images(ctx: RunContext, sweep: Sweep, data, splat_images, poisson_ima
     keep("peers_ms.png", plots.bar_peers(peer_rows, "ms_per_frame", "time per frame [ms], log scale",
                                          "render time per frame, same camera", log=True))
     keep("peers_psnr.png", plots.bar_peers(peer_rows, "psnr", "PSNR (sRGB) [dB]", "error against the ground truth"))
-    frames = data["planning"]["placement_frames"]
-    walk_axis = "position along the walk (even: a frame placement served; odd: halfway between two)"
-    keep("planning_walk_holes.png", plots.walk_by_method(frames, "hole_rate", "hole rate (GT hit, probes not HIT)", walk_axis))
-    keep("planning_walk_psnr.png", plots.walk_by_method(frames, "psnr", "PSNR (sRGB) [dB]", walk_axis))
+    if data["planning"] is None:
+        for name in PLANNING_IMAGES:
+            if os.path.exists(os.path.join(ctx.images_dir, name)):
+                os.remove(os.path.join(ctx.images_dir, name))
+    else:
+        frames = data["planning"]["placement_frames"]
+        walk_axis = "position along the walk (even: a frame placement served; odd: halfway between two)"
+        keep("planning_walk_holes.png", plots.walk_by_method(frames, "hole_rate", "hole rate (GT hit, probes not HIT)", walk_axis))
+        keep("planning_walk_psnr.png", plots.walk_by_method(frames, "psnr", "PSNR (sRGB) [dB]", walk_axis))
     for label, source in (("probes", sweep.reference_images), ("mesh_probes", sweep.mesh_triplets),
                           ("splats", splat_images), ("poisson", poisson_images)):
         for view, (gt, test, error_map, row) in source.items():

@@ -64,12 +64,13 @@ class Scene:
         """World positions of the scene grid's probes."""
         return grid_positions(self.grid_min, self.grid_max, self.grid_counts)
 
-    def walk_views(self) -> List[View]:
-        """The walk as views: `frames` eyes evenly spaced along the polyline of `points`."""
+    def walk_views(self, frames: Optional[int] = None) -> List[View]:
+        """The walk as views: `frames` eyes (the scene's own count unless given) evenly spaced
+        along the polyline of `points`."""
         if not self.walk:
             return []
         points = self.walk["points"]
-        frames = self.walk["frames"]
+        frames = self.walk["frames"] if frames is None else frames
         lengths = [math.dist(a, b) for a, b in zip(points, points[1:])]
         total = sum(lengths)
         views = []

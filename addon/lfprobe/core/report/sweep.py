@@ -113,7 +113,8 @@ def bake(ctx: RunContext, setup: ProbeSetup, folder: str) -> Dict[str, object]:
         options = BakeOptions(resolution=setup.resolution, splat_scale=variant["splat_scale"],
                               hole_fill_texels=variant["hole_fill_texels"])
         start = time.perf_counter()
-        summary = pipeline.bake_from_cloud(setup.density.cloud, folder, placement, options)
+        summary = pipeline.bake_from_cloud(setup.density.cloud, folder, placement, options,
+                                           cache_dir=ctx.cache_dir)
         wall = time.perf_counter() - start
         bake_seconds = summary["bake_seconds"] + summary.get("normals_seconds", 0.0)
     coverage = summary["mean_coverage"]
@@ -125,6 +126,9 @@ def bake(ctx: RunContext, setup: ProbeSetup, folder: str) -> Dict[str, object]:
         "coverage_surface": coverage["surface"],
         "coverage_inferred": coverage["inferred"],
         "coverage_unknown": coverage["unknown"],
+        # The cloud's normals, spacing and hierarchy read from an earlier bake's cache: its
+        # bake_seconds hold the read instead of the estimate.
+        "prepared_from_cache": bool(summary.get("prepared_from_cache", False)),
     }
 
 
@@ -193,6 +197,8 @@ class Sweep:
         setups: List[Tuple[ProbeSetup, List]] = []
         for density in self.densities:
             for res in p.fine_resolutions:
+                if density is not densest and p.coarse_scans_at_reference_only and res != reference_res:
+                    continue
                 for variant in p.bake_variants:
                     setup = ProbeSetup("scan", res, full_grid[2], full_grid[0], full_grid[1], variant, density)
                     is_reference = density is densest and res == reference_res and variant == "splat + fill"
@@ -205,7 +211,7 @@ class Sweep:
                 lo, hi, counts = scaled_grid(ctx, factor)
                 setups.append((ProbeSetup("scan", reference_res, counts, lo, hi, "splat + fill", densest),
                                [DEFAULT_TRACE]))
-        for res in p.fine_resolutions:
+        for res in p.mesh_grid_resolutions or p.fine_resolutions:
             setups.append((ProbeSetup("mesh", res, full_grid[2], full_grid[0], full_grid[1]), [DEFAULT_TRACE]))
 
         for index, (setup, traces) in enumerate(setups):
@@ -330,7 +336,7 @@ class Sweep:
     def walk(self, field, setup: ProbeSetup) -> None:
         ctx = self.ctx
         positions = setup.positions()
-        for view in ctx.scene.walk_views():
+        for view in ctx.scene.walk_views(ctx.preset.walk_frames):
             camera = ctx.camera(view)
             gt, _ = ctx.ground_truth(camera)
             image, stats = ctx.render_probes(field, camera, DEFAULT_TRACE[1])
