@@ -392,6 +392,105 @@ void pull_push(ProbeMap& map, const std::vector<std::uint8_t>& fill, int hole_fi
 
 } // namespace
 
+namespace {
+
+// A texel is seen through a nearer surface where that surface lies nearer than its own
+// distance divided by this: well apart from the depth steps within one surface.
+constexpr float kSieveDepthRatio = 1.25f;
+// A gap's rim joins its hole at distances within this fraction of its neighbour's in the hole.
+constexpr float kSieveRimSpread = 0.1f;
+
+} // namespace
+
+int sieve_gap_reach(int resolution) {
+    return std::max(1, resolution / 256);
+}
+
+std::size_t open_gaps_in_nearer_surfaces(ProbeMap& map, int reach) {
+    const int n = map.resolution;
+    if (reach <= 0 || n <= 0) {
+        return 0;
+    }
+    const std::size_t count = map.texel_count();
+    // Measured distances (+inf elsewhere), read while the flags are written: the test sees the
+    // map as the splats left it.
+    std::vector<float> measured(count);
+    tbb::parallel_for(std::size_t{0}, count, [&](std::size_t t) {
+        measured[t] = map.state(t) == TexelState::Surface ? map.distance_at(t)
+                                                          : std::numeric_limits<float>::infinity();
+    });
+    constexpr int kDirections[8][2] = {{1, 0}, {-1, 0}, {0, 1},  {0, -1},
+                                       {1, 1}, {1, -1}, {-1, 1}, {-1, -1}};
+    const auto index = [n](int x, int y) {
+        return static_cast<std::size_t>(y) * static_cast<std::size_t>(n) +
+               static_cast<std::size_t>(x);
+    };
+    // In how many of the 8 directions a nearer surface lies within the reach, stopping at the
+    // first open one when `stop` is set. Beyond the map's edge counts as open: the octahedral
+    // fold's far side is not a step away in texels.
+    const auto closed_directions = [&](int x, int y, int stop) {
+        const float nearer_than = measured[index(x, y)] / kSieveDepthRatio;
+        int closed = 0;
+        int open = 0;
+        for (const auto& d : kDirections) {
+            bool found = false;
+            for (int k = 1; k <= reach && !found; ++k) {
+                const int ux = x + k * d[0];
+                const int uy = y + k * d[1];
+                if (ux < 0 || uy < 0 || ux >= n || uy >= n) {
+                    break;
+                }
+                found = measured[index(ux, uy)] < nearer_than;
+            }
+            closed += found ? 1 : 0;
+            open += found ? 0 : 1;
+            if (open > stop) {
+                break;
+            }
+        }
+        return closed;
+    };
+    // Seeds: texels closed in every direction. Most texels stop at their first open direction.
+    std::vector<std::uint8_t> seen_through(count, 0);
+    tbb::parallel_for(0, n, [&](int y) {
+        for (int x = 0; x < n; ++x) {
+            if (std::isfinite(measured[index(x, y)]) && closed_directions(x, y, 0) == 8) {
+                seen_through[index(x, y)] = 1;
+            }
+        }
+    });
+    // A gap wider than the reach across one way leaves its rim open that way: the rim joins
+    // its seed where it is closed in all but two directions at about the seed's distance, so
+    // that the hole is the whole gap. A hole with the far surface left in its border would be
+    // filled as a disocclusion, from behind. A slit (open both ways along it) has no seed.
+    std::vector<std::uint32_t> queue;
+    for (std::size_t t = 0; t < count; ++t) {
+        if (seen_through[t] != 0) {
+            queue.push_back(static_cast<std::uint32_t>(t));
+        }
+    }
+    for (std::size_t q = 0; q < queue.size(); ++q) {
+        const std::uint32_t t = queue[q];
+        const float depth = measured[t];
+        for_each_neighbour(t, n, [&](std::uint32_t u) {
+            if (seen_through[u] != 0 ||
+                !(std::abs(measured[u] - depth) <= kSieveRimSpread * depth)) {
+                return;
+            }
+            const int ux = static_cast<int>(u % static_cast<std::uint32_t>(n));
+            const int uy = static_cast<int>(u / static_cast<std::uint32_t>(n));
+            if (closed_directions(ux, uy, 2) >= 6) {
+                seen_through[u] = 1;
+                queue.push_back(u);
+            }
+        });
+    }
+    for (const std::uint32_t t : queue) {
+        map.set_unknown(t);
+    }
+    return queue.size();
+}
+
 void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
     if (hole_fill_texels <= 0) {
         return;

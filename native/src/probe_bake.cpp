@@ -672,6 +672,10 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     if (progress != nullptr) {
         progress->throw_if_cancelled();
     }
+    // The paper's bake (no hole filling) keeps what its points show.
+    if (hole_fill_width(settings) > 0) {
+        (void)open_gaps_in_nearer_surfaces(map, sieve_gap_reach(n));
+    }
     fill_small_holes(map, hole_fill_width(settings));
     return map;
 }

@@ -130,4 +130,21 @@ bake_probe_from_gathered_cut(const PointCloud& points, const LocalGeometry& geom
 // spans a silhouette.
 void fill_small_holes(ProbeMap& map, int hole_fill_texels);
 
+// Marks unknown each measured texel seen through a gap between a nearer surface's splats: one
+// that, in each of the 8 texel directions within `reach` texels, has a measured texel nearer
+// than its own distance / 1.25. A surface scanned at a grazing angle is sampled sparsely
+// along the scanner's rays; seen from above by a probe close to it, its splats leave gaps a
+// few texels wide in which the floor behind showed, a wrong surface no later step could tell
+// from a right one. As holes in the near surface, fill_small_holes then fills them from it. A
+// slit (between the slats of a blind) stays open along its length, and a texel at a
+// silhouette has the far surface on one side, so neither is touched. A gap's rim, open across
+// the gap where it is wider than the reach, joins the texels closed all round beside it where
+// it is closed in 6 directions at about their distance: the hole is the whole gap, whose
+// border is then the near surface alone. Returns how many texels it marked.
+std::size_t open_gaps_in_nearer_surfaces(ProbeMap& map, int reach);
+
+// The reach of open_gaps_in_nearer_surfaces for an N×N map: the same angle, about 0.9°, at
+// every resolution (8 texels at 2048², at least 1).
+[[nodiscard]] int sieve_gap_reach(int resolution);
+
 } // namespace lfprobe
