@@ -55,7 +55,8 @@ def line(method: str, view: str, where: str, figures: dict, ms: float) -> str:
 def texel_figures(test: dict, reference: dict) -> str:
     """Probe `test` against `reference` (read_probe dicts at one resolution), texel by texel: the
     share of texels on the same surface (distance within 2 %), the sRGB PSNR over those, and
-    over those at least 3 texels from any other (away from silhouettes)."""
+    over those at least 3 texels from any other (away from silhouettes); and over the texels
+    where both hold a surface, the share on a wrong one and the PSNR over all of them."""
     import numpy as np
     from scipy.ndimage import binary_erosion
     n = int(reference["resolution"])
@@ -69,8 +70,12 @@ def texel_figures(test: dict, reference: dict) -> str:
     def psnr(mask):
         value = metrics.psnr_over(rgb(reference), rgb(test), mask)
         return float("nan") if value is None else value
+    both = np.isfinite(d_ref) & np.isfinite(d_test)
+    wrong = both & ~same
     return (f"same surface {100 * same.mean():5.1f} % of texels, PSNR there {psnr(same):5.2f} dB, "
-            f"away from their edges {psnr(inner):5.2f} dB")
+            f"away from their edges {psnr(inner):5.2f} dB; of the texels both see a surface "
+            f"{100 * wrong.sum() / max(both.sum(), 1):4.2f} % on a wrong one, PSNR over them "
+            f"{psnr(both):5.2f} dB")
 
 
 def texel_check(ctx, folder: str, anchors: list, resolution: int, scan: dict, work: str) -> None:

@@ -381,12 +381,12 @@ TEST(ProbeBake, AWallSeenThroughTheGapsOfANearPlatesSplatsIsNotShown) {
     // (the paper's bake, no hole filling, shows it there). The default bake opens those gaps
     // and fills them from the plate.
     PointCloud cloud;
-    for (const auto& [z, half] : {std::pair{0.3f, 0.15f}, std::pair{1.5f, 1.2f}}) {
-        const int count = static_cast<int>(std::lround(2.0f * half / 0.01f)) + 1;
+    for (const auto& [z, extent] : {std::pair{0.3f, 0.15f}, std::pair{1.5f, 1.2f}}) {
+        const int count = static_cast<int>(std::lround(2.0f * extent / 0.01f)) + 1;
         for (int i = 0; i < count; ++i) {
             for (int j = 0; j < count; ++j) {
-                cloud.positions.emplace_back(-half + 0.01f * static_cast<float>(i),
-                                             -half + 0.01f * static_cast<float>(j), z);
+                cloud.positions.emplace_back(-extent + 0.01f * static_cast<float>(i),
+                                             -extent + 0.01f * static_cast<float>(j), z);
                 cloud.colors.emplace_back(0.5f);
                 cloud.scan_index.push_back(0);
             }
