@@ -425,9 +425,9 @@ std::size_t open_gaps_in_nearer_surfaces(ProbeMap& map, int reach) {
         return static_cast<std::size_t>(y) * static_cast<std::size_t>(n) +
                static_cast<std::size_t>(x);
     };
-    // In how many of the 8 directions a nearer surface lies within the reach, stopping at the
-    // first open one when `stop` is set. Beyond the map's edge counts as open: the octahedral
-    // fold's far side is not a step away in texels.
+    // In how many of the 8 directions a nearer surface lies within the reach, stopping once
+    // more than `stop` are open. Beyond the map's edge counts as open: the octahedral fold's far
+    // side is not a step away in texels.
     const auto closed_directions = [&](int x, int y, int stop) {
         const float nearer_than = measured[index(x, y)] / kSieveDepthRatio;
         int closed = 0;

@@ -672,9 +672,11 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     if (progress != nullptr) {
         progress->throw_if_cancelled();
     }
-    // The paper's bake (no hole filling) keeps what its points show.
+    // The paper's bake (no hole filling) keeps what its points show; a gap is opened only
+    // where the fill can close it.
     if (hole_fill_width(settings) > 0) {
-        (void)open_gaps_in_nearer_surfaces(map, sieve_gap_reach(n));
+        (void)open_gaps_in_nearer_surfaces(
+            map, std::min(sieve_gap_reach(n), std::max(1, hole_fill_width(settings) / 2)));
     }
     fill_small_holes(map, hole_fill_width(settings));
     return map;
