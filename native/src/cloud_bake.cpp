@@ -1,7 +1,6 @@
 #include "lfprobe/cloud_bake.hpp"
 
 #include <chrono>
-#include <filesystem>
 #include <optional>
 
 #include "lfprobe/bake_scratch.hpp"
@@ -70,13 +69,7 @@ CloudBakeSource prepare_cloud_bake(std::shared_ptr<const PointCloud> cloud,
     source.curve = curve_ordered_if_small(source, progress);
     source.hierarchy_seconds = seconds_since(hierarchy_start);
     if (!entry.empty()) {
-        try {
-            write_prepared_cloud(entry, key, source.geometry, source.hierarchy);
-        } catch (const IoError&) {
-            // A cache that cannot be written (a full disk, a read-only folder): the bake goes
-            // on; the next one computes again.
-        } catch (const std::filesystem::filesystem_error&) {
-        }
+        (void)try_write_prepared_cloud(entry, key, source.geometry, source.hierarchy);
     }
     return source;
 }

@@ -387,4 +387,15 @@ void write_prepared_cloud(const std::string& entry, const PreparedCloudKey& key,
     temporary.commit_as(path);
 }
 
+bool try_write_prepared_cloud(const std::string& entry, const PreparedCloudKey& key,
+                              const LocalGeometry& geometry, const PointHierarchy& hierarchy) {
+    try {
+        write_prepared_cloud(entry, key, geometry, hierarchy);
+        return true;
+    } catch (const IoError&) {
+    } catch (const std::filesystem::filesystem_error&) {
+    }
+    return false;
+}
+
 } // namespace lfprobe

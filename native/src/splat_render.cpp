@@ -4,7 +4,6 @@
 #include <bit>
 #include <chrono>
 #include <cmath>
-#include <filesystem>
 #include <limits>
 #include <memory>
 #include <optional>
@@ -202,22 +201,17 @@ LocalGeometry cached_splat_geometry(const PointCloud& cloud, const std::string& 
         return estimate_local_geometry(cloud, {}, progress);
     }
     const LocalGeometryOptions options;
+    PreparedCloudKey key;
     for (const bool with_hierarchy : {true, false}) {
-        const PreparedCloudKey key = prepared_cloud_key(cloud, options, with_hierarchy);
+        key = prepared_cloud_key(cloud, options, with_hierarchy);
         if (std::optional<PreparedCloud> cached =
                 read_prepared_cloud(prepared_cloud_entry_path(key, cache_dir), key)) {
             return std::move(cached->geometry);
         }
     }
+    // `key` is now the geometry-only entry's.
     LocalGeometry geometry = estimate_local_geometry(cloud, options, progress);
-    const PreparedCloudKey key = prepared_cloud_key(cloud, options, false);
-    try {
-        write_prepared_cloud(prepared_cloud_entry_path(key, cache_dir), key, geometry, {});
-    } catch (const IoError&) {
-        // A cache that cannot be written (a full disk, a read-only folder): the next splat
-        // estimates again.
-    } catch (const std::filesystem::filesystem_error&) {
-    }
+    (void)try_write_prepared_cloud(prepared_cloud_entry_path(key, cache_dir), key, geometry, {});
     return geometry;
 }
 

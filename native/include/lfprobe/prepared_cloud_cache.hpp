@@ -55,4 +55,9 @@ struct PreparedCloudKey {
 void write_prepared_cloud(const std::string& entry, const PreparedCloudKey& key,
                           const LocalGeometry& geometry, const PointHierarchy& hierarchy);
 
+// The same where a cache that cannot be written (a full disk, a read-only folder) only means
+// the next run computes again: false instead of an error.
+bool try_write_prepared_cloud(const std::string& entry, const PreparedCloudKey& key,
+                              const LocalGeometry& geometry, const PointHierarchy& hierarchy);
+
 } // namespace lfprobe
