@@ -229,6 +229,20 @@ def test_a_run_without_the_planning_section_leaves_no_planning_file_of_an_earlie
     assert {"sweep.csv", "peers.csv", "distance.csv"} <= written
 
 
+def test_a_run_deletes_the_report_images_an_earlier_run_left_and_keeps_other_files(tmp_path):
+    """A triplet of a setting the preset no longer renders (the demo's mesh-baked grid moved to
+    1024², so no mesh triplet) must not stay beside this run's images; a user's own file stays."""
+    from lfprobe.core.report.runner import remove_stale_images
+
+    for name in ("triplet_mesh_probes_at_probe.png", "triplet_probes_at_probe.png",
+                 "planning_walk_psnr.png", "speed_ms_psnr.png", "my_notes.png", "triplet_probes.txt"):
+        (tmp_path / name).write_bytes(b"x")
+    removed = remove_stale_images(str(tmp_path), {"triplet_probes_at_probe.png", "speed_ms_psnr.png"})
+    assert removed == ["planning_walk_psnr.png", "triplet_mesh_probes_at_probe.png"]
+    assert sorted(os.listdir(tmp_path)) == ["my_notes.png", "speed_ms_psnr.png", "triplet_probes.txt",
+                                            "triplet_probes_at_probe.png"]
+
+
 def test_findings_quote_the_measured_figures(tiny_report):
     _, data, result = tiny_report
     first = sorted((r for r in data["at_probe"]

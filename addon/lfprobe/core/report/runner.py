@@ -8,7 +8,7 @@ import math
 import os
 import platform
 import time
-from typing import Callable, Dict, List, Optional, Sequence
+from typing import Callable, Collection, Dict, List, Optional, Sequence
 
 from .. import metrics
 from . import files, images, peers, planning, plots, stability
@@ -20,7 +20,9 @@ from .sweep import Sweep, aggregate, pareto_front
 
 # What the section "Model only what a scene needs" writes beside report.html.
 PLANNING_TABLES = ("planning_resolution.csv", "planning_walk.csv", "planning_storage.csv", "planning_iterations.csv")
-PLANNING_IMAGES = ("planning_walk_holes.png", "planning_walk_psnr.png")
+# The name prefixes of every image _write_images writes: what a later run may delete.
+REPORT_IMAGE_PREFIXES = ("speed_", "distance_", "resolution_", "at_probe_", "peers_", "planning_",
+                         "triplet_", "confusion_")
 
 
 def _finite(v) -> bool:
@@ -262,11 +264,7 @@ def _write_images(ctx: RunContext, sweep: Sweep, data, splat_images, poisson_ima
     keep("peers_ms.png", plots.bar_peers(peer_rows, "ms_per_frame", "time per frame [ms], log scale",
                                          "render time per frame, same camera", log=True))
     keep("peers_psnr.png", plots.bar_peers(peer_rows, "psnr", "PSNR (sRGB) [dB]", "error against the ground truth"))
-    if data["planning"] is None:
-        for name in PLANNING_IMAGES:
-            if os.path.exists(os.path.join(ctx.images_dir, name)):
-                os.remove(os.path.join(ctx.images_dir, name))
-    else:
+    if data["planning"] is not None:
         frames = data["planning"]["placement_frames"]
         walk_axis = "position along the walk (even: a frame placement served; odd: halfway between two)"
         keep("planning_walk_holes.png", plots.walk_by_method(frames, "hole_rate", "hole rate (GT hit, probes not HIT)", walk_axis))
@@ -277,4 +275,18 @@ def _write_images(ctx: RunContext, sweep: Sweep, data, splat_images, poisson_ima
             keep(f"triplet_{label}_{view}.png", images.png_bytes(images.triplet(gt, test, error_map)))
             if label == "probes":
                 keep(f"confusion_{view}.png", plots.confusion_matrix(row["confusion"], f"view '{view}', {label}"))
+    remove_stale_images(ctx.images_dir, pngs)
     return pngs
+
+
+def remove_stale_images(images_dir: str, written: Collection[str]) -> List[str]:
+    """Deletes the report's own images that this run did not write (a triplet of a view or
+    setting an earlier run had, a plot this run had no data for), so that the folder shows
+    this run alone; files the report never writes are left. Returns the names removed."""
+    removed = []
+    for name in sorted(os.listdir(images_dir)):
+        owned = name.endswith(".png") and name.startswith(REPORT_IMAGE_PREFIXES)
+        if owned and name not in written:
+            os.remove(os.path.join(images_dir, name))
+            removed.append(name)
+    return removed

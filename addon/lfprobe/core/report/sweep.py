@@ -173,6 +173,9 @@ class Sweep:
         self.reference_setting: Optional[str] = None
         self.mesh_triplets: Dict[str, Tuple[dict, dict, np.ndarray, dict]] = {}
         self._controls: Dict[tuple, float] = {}
+        # Mesh-baked single probes by (eye, resolution): the distance sweep's control at a grid
+        # probe is the probe the at-probe section sees from its centre, baked once for both.
+        self._mesh_probes: Dict[tuple, Tuple[str, float, float]] = {}
 
     # --- the parts ---------------------------------------------------------------------------
     def run(self) -> None:
@@ -203,8 +206,10 @@ class Sweep:
                     setup = ProbeSetup("scan", res, full_grid[2], full_grid[0], full_grid[1], variant, density)
                     is_reference = density is densest and res == reference_res and variant == "splat + fill"
                     traces = list(p.trace_variants) if is_reference else [DEFAULT_TRACE]
-                    if density is densest and variant == "splat + fill":
-                        traces.append(COMPACT_TRACE)  # the storage comparison of "planning"
+                    # Compact storage beside full: at every resolution for the storage comparison
+                    # of "planning", at the reference alone when the preset skips planning.
+                    if density is densest and variant == "splat + fill" and (p.planning or res == reference_res):
+                        traces.append(COMPACT_TRACE)
                     setups.append((setup, traces))
         for factor in p.count_factors:
             if factor != 1.0:
@@ -325,13 +330,28 @@ class Sweep:
         from the comparison between positions)."""
         key = (view.name, tuple(eye), resolution)
         if key not in self._controls:
-            ctx = self.ctx
-            folder = ctx.work_path("probes", "probe_at_eye")
-            bake_from_mesh([ctx.scene.mesh], folder, ProbePlacementSpec(positions=[eye]), BakeOptions(resolution=resolution))
-            image, _ = ctx.render_probes(ctx.native.ProbeField.load(folder), camera, DEFAULT_TRACE[1])
-            shutil.rmtree(folder, ignore_errors=True)
+            folder, _, _ = self._mesh_probe(eye, resolution)
+            image, _ = self.ctx.render_probes(self.ctx.native.ProbeField.load(folder), camera, DEFAULT_TRACE[1])
             self._controls[key] = psnr_only(gt, image)
         return self._controls[key]
+
+    def _mesh_probe(self, eye: Sequence[float], resolution: int) -> Tuple[str, float, float]:
+        """(folder, bake seconds, bake wall seconds) of a mesh-baked probe at `eye`, baked on
+        first use and kept until the sweep ends."""
+        key = (tuple(float(c) for c in eye), int(resolution))
+        if key not in self._mesh_probes:
+            ctx = self.ctx
+            folder = ctx.work_path("probes", f"mesh_probe_{len(self._mesh_probes):03d}")
+            start = time.perf_counter()
+            summary = bake_from_mesh([ctx.scene.mesh], folder, ProbePlacementSpec(positions=[list(key[0])]),
+                                     BakeOptions(resolution=resolution))
+            self._mesh_probes[key] = (folder, summary["bake_seconds"], time.perf_counter() - start)
+        return self._mesh_probes[key]
+
+    def _drop_mesh_probes(self) -> None:
+        for folder, _, _ in self._mesh_probes.values():
+            shutil.rmtree(folder, ignore_errors=True)
+        self._mesh_probes.clear()
 
     def walk(self, field, setup: ProbeSetup) -> None:
         ctx = self.ctx
@@ -357,11 +377,7 @@ class Sweep:
         for res in ctx.preset.mesh_resolutions:
             for view in ctx.views:
                 anchor = min(positions, key=lambda q: math.dist(q, view.position))
-                folder = ctx.work_path("probes", f"at_probe_{res}_{view.name}")
-                placement = ProbePlacementSpec(positions=[anchor])
-                start = time.perf_counter()
-                summary = bake_from_mesh([ctx.scene.mesh], folder, placement, BakeOptions(resolution=res))
-                bake_wall = time.perf_counter() - start
+                folder, bake_seconds, bake_wall = self._mesh_probe(anchor, res)
                 field = ctx.native.ProbeField.load(folder)
                 camera = ctx.camera(view, anchor)
                 # Unfiltered on both sides: the pixel centre, its texture point-sampled.
@@ -396,11 +412,11 @@ class Sweep:
                         "psnr_one_sample_vs_filtered_gt": psnr_only(gt, centre_image),
                         "psnr_footprint_one_sample_vs_filtered_gt": footprint_psnr,
                         "depth_absrel": figures["depth_absrel"], "hole_rate": figures["hole_rate"],
-                        "bake_seconds": summary["bake_seconds"], "bake_wall_seconds": bake_wall,
+                        "bake_seconds": bake_seconds, "bake_wall_seconds": bake_wall,
                         "texels_per_ray": stats["mean_steps"], **timing(stats, pixel_count(camera)),
                     })
                 del field
-                shutil.rmtree(folder, ignore_errors=True)
+        self._drop_mesh_probes()
         ctx.log(f"  mesh-baked probes at their own centre: {len(self.at_probe_rows)} renders")
 
 
