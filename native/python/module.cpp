@@ -530,6 +530,7 @@ PYBIND11_MODULE(_native, m) {
     lfprobe::python::bind_mesh(m);
     lfprobe::python::bind_plan(m);
     lfprobe::python::bind_staged_bake(m);
+    lfprobe::python::bind_cloud_geometry(m);
 
     m.def(
         "append_known_space",

@@ -398,4 +398,24 @@ bool try_write_prepared_cloud(const std::string& entry, const PreparedCloudKey& 
     return false;
 }
 
+LocalGeometry cached_local_geometry(const PointCloud& cloud, const std::string& cache_dir,
+                                    Progress* progress) {
+    if (cache_dir.empty()) {
+        return estimate_local_geometry(cloud, {}, progress);
+    }
+    const LocalGeometryOptions options;
+    PreparedCloudKey key;
+    for (const bool with_hierarchy : {true, false}) {
+        key = prepared_cloud_key(cloud, options, with_hierarchy);
+        if (std::optional<PreparedCloud> cached =
+                read_prepared_cloud(prepared_cloud_entry_path(key, cache_dir), key)) {
+            return std::move(cached->geometry);
+        }
+    }
+    // `key` is now the geometry-only entry's.
+    LocalGeometry geometry = estimate_local_geometry(cloud, options, progress);
+    (void)try_write_prepared_cloud(prepared_cloud_entry_path(key, cache_dir), key, geometry, {});
+    return geometry;
+}
+
 } // namespace lfprobe

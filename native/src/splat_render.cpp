@@ -190,33 +190,6 @@ nlohmann::json splat_settings_json(const SplatSettings& settings) {
                           {"max_radius_pixels", settings.max_radius_pixels}};
 }
 
-namespace {
-
-// The cloud's local geometry with the default options: from a bake's cache entry (it holds the
-// point hierarchy too) or a splat's (geometry alone), else estimated and written as a splat's
-// entry. Splatting a cloud from several cameras then estimates its geometry once.
-LocalGeometry cached_splat_geometry(const PointCloud& cloud, const std::string& cache_dir,
-                                    Progress* progress) {
-    if (cache_dir.empty()) {
-        return estimate_local_geometry(cloud, {}, progress);
-    }
-    const LocalGeometryOptions options;
-    PreparedCloudKey key;
-    for (const bool with_hierarchy : {true, false}) {
-        key = prepared_cloud_key(cloud, options, with_hierarchy);
-        if (std::optional<PreparedCloud> cached =
-                read_prepared_cloud(prepared_cloud_entry_path(key, cache_dir), key)) {
-            return std::move(cached->geometry);
-        }
-    }
-    // `key` is now the geometry-only entry's.
-    LocalGeometry geometry = estimate_local_geometry(cloud, options, progress);
-    (void)try_write_prepared_cloud(prepared_cloud_entry_path(key, cache_dir), key, geometry, {});
-    return geometry;
-}
-
-} // namespace
-
 SplatStats splat_cloud_to_exr(const PointCloud& cloud, const Camera& camera,
                               const SplatSettings& settings, const std::string& output_path,
                               Progress* progress, double* geometry_seconds,
@@ -224,7 +197,7 @@ SplatStats splat_cloud_to_exr(const PointCloud& cloud, const Camera& camera,
     std::optional<LocalGeometry> geometry;
     if (settings.fixed_radius <= 0.0) {
         const auto start = std::chrono::steady_clock::now();
-        geometry = cached_splat_geometry(cloud, cache_dir, progress);
+        geometry = cached_local_geometry(cloud, cache_dir, progress);
         if (geometry_seconds != nullptr) {
             *geometry_seconds =
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

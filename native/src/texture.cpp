@@ -146,7 +146,14 @@ glm::vec3 Texture::texel(int x, int y) const {
 
 namespace {
 
+// i (a whole number) modulo n into [0, n): integer arithmetic for the coordinates a sampler
+// meets (fmod was a tenth of a mesh bake), fmod beyond them.
 int wrap_index(double i, int n) {
+    constexpr double kIntegerRange = 1e15;
+    if (std::abs(i) < kIntegerRange) {
+        const std::int64_t m = static_cast<std::int64_t>(i) % n;
+        return static_cast<int>(m < 0 ? m + n : m);
+    }
     const double m = std::fmod(i, static_cast<double>(n));
     return static_cast<int>(m < 0.0 ? m + n : m);
 }

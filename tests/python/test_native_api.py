@@ -191,6 +191,28 @@ def test_clouds_from_arrays_keep_intensities_and_scan_paths(native):
         native.PointCloud.from_arrays(positions, scan_paths=["a", "b"])
 
 
+def test_local_geometry_gives_the_bakes_normals_and_reads_the_bakes_cache(native, tmp_path):
+    """The Poisson peer's normals: a box's wall normals face its scanner (inward), the spacing is
+    the grid's; after a bake with a cache the geometry is read from the bake's entry, the same
+    arrays, and nothing new is written."""
+    cloud = box_cloud(native, 0.05)
+    fresh = native.start_local_geometry(cloud).run()
+    normals, spacing = fresh["normals"], fresh["spacing"]
+    assert normals.shape == (len(cloud), 3) and normals.dtype == np.float32 and fresh["oriented"].all()
+    to_scanner = np.array([0.0, 0.0, 1.25], np.float32) - cloud.positions
+    assert (np.einsum("ij,ij->i", normals, to_scanner) > 0).all()
+    np.testing.assert_allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-5)
+    assert 0.04 < float(np.median(spacing)) < 0.08
+    cache = tmp_path / "cache"
+    native.bake_probe_set(cloud, str(tmp_path / "set"), resolution=32, positions=[[0.0, 0.0, 1.25]],
+                          cache_dir=str(cache))
+    entries = sorted(p.name for p in cache.iterdir())
+    cached = native.start_local_geometry(cloud, cache_dir=str(cache)).run()
+    assert sorted(p.name for p in cache.iterdir()) == entries
+    np.testing.assert_array_equal(cached["normals"], normals)
+    np.testing.assert_array_equal(cached["spacing"], spacing)
+
+
 def test_grid_positions_are_the_bakes_with_a_one_probe_axis_at_the_centre(native):
     from lfprobe.core import defaults
     from lfprobe.core.report.scene import grid_positions

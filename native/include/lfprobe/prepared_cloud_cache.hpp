@@ -21,6 +21,7 @@
 #include "lfprobe/local_geometry.hpp"
 #include "lfprobe/point_cloud.hpp"
 #include "lfprobe/point_hierarchy.hpp"
+#include "lfprobe/progress.hpp"
 
 namespace lfprobe {
 
@@ -59,5 +60,14 @@ void write_prepared_cloud(const std::string& entry, const PreparedCloudKey& key,
 // the next run computes again: false instead of an error.
 bool try_write_prepared_cloud(const std::string& entry, const PreparedCloudKey& key,
                               const LocalGeometry& geometry, const PointHierarchy& hierarchy);
+
+// The cloud's local geometry with the default options, for what needs the geometry without a
+// bake (splats, the Poisson peer's normals): read from a bake's entry in `cache_dir` (it holds
+// the point hierarchy too) or from a geometry-only entry, else estimated and written as a
+// geometry-only entry, so that several such uses of one cloud estimate it once. An empty
+// cache_dir estimates and caches nothing.
+[[nodiscard]] LocalGeometry cached_local_geometry(const PointCloud& cloud,
+                                                  const std::string& cache_dir,
+                                                  Progress* progress = nullptr);
 
 } // namespace lfprobe

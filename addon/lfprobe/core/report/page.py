@@ -8,6 +8,7 @@ from typing import Dict, Optional
 
 from . import html, stability
 from .html import num, table, text
+from .peers import POISSON_NORMALS
 
 MIB = 1024.0 * 1024.0
 METRIC_COLUMNS = [
@@ -205,7 +206,7 @@ def _peers_section(page, data: Dict[str, object], img, findings) -> None:
     scene = data["scene"]
     page.section("peers", "Peers: splats and a Poisson mesh")
     page.paragraph("From the densest scan: the raw cloud drawn as z-buffered splats (native, sized by local spacing), "
-                   "and an Open3D screened Poisson mesh (normals estimated per scan, oriented toward its scanner; "
+                   "and an Open3D screened Poisson mesh (normals as the caption below says; "
                    "vertices of the lowest 2% density and outside the cloud's box removed) ray traced with Embree "
                    "from the same camera. Memory: splats hold positions, colours and spacing (28 B/point); the mesh "
                    "holds float32 positions, indices and corner colours (Embree's BVH not counted); probes: the "
@@ -215,7 +216,9 @@ def _peers_section(page, data: Dict[str, object], img, findings) -> None:
         page.paragraph(f"Poisson mesh: not available: {poisson['error']}", "fail")
     else:
         page.paragraph(f"Poisson reconstruction (depth {poisson['poisson_depth']}): {poisson['reconstruction_seconds']:.2f} s "
-                       f"(normals {poisson['normals_seconds']:.2f} s), {poisson['vertices']:,} vertices, "
+                       f"(normals {poisson['normals_seconds']:.2f} s: "
+                       f"{POISSON_NORMALS.get(poisson.get('normals', 'open3d'), poisson.get('normals'))}), "
+                       f"{poisson['vertices']:,} vertices, "
                        f"{poisson['triangles']:,} triangles, {poisson['ply_bytes'] / MIB:.2f} MiB PLY, "
                        f"{poisson['memory_bytes'] / MIB:.2f} MiB in memory.")
     findings("peers")
