@@ -54,15 +54,25 @@ glm::vec3 Mesh::base_color(std::size_t tri, float u, float v) const {
 }
 
 glm::vec3 Mesh::base_color(std::size_t tri, float u, float v, double footprint) const {
+    return base_color_over_texels(tri, u, v,
+                                  footprint > 0.0 ? footprint * texture_density(tri) : 0.0);
+}
+
+double Mesh::texture_density(std::size_t tri) const {
+    const Material& m = materials[material[tri]];
+    return m.texture && has_uvs() ? texels_per_metre(*this, tri, *m.texture) : 0.0;
+}
+
+glm::vec3 Mesh::base_color_over_texels(std::size_t tri, float u, float v,
+                                       double footprint_texels) const {
     const float w = 1.0f - u - v;
     const Material& m = materials[material[tri]];
     glm::vec3 c = m.base_color;
     if (m.texture && has_uvs()) {
         const glm::vec2 uv =
             w * corner_uvs[3 * tri] + u * corner_uvs[3 * tri + 1] + v * corner_uvs[3 * tri + 2];
-        c *= footprint > 0.0
-                 ? m.texture->sample(uv, footprint * texels_per_metre(*this, tri, *m.texture))
-                 : m.texture->sample(uv);
+        // At most one texel (or none given) it is the bilinear sample itself.
+        c *= m.texture->sample(uv, footprint_texels);
     }
     if (has_colors()) {
         c *= w * corner_colors[3 * tri] + u * corner_colors[3 * tri + 1] +

@@ -150,6 +150,9 @@ namespace {
 // meets (fmod was a tenth of a mesh bake), fmod beyond them.
 int wrap_index(double i, int n) {
     constexpr double kIntegerRange = 1e15;
+    if (i >= 0.0 && i < static_cast<double>(n)) {
+        return static_cast<int>(i); // inside the image: no division
+    }
     if (std::abs(i) < kIntegerRange) {
         const std::int64_t m = static_cast<std::int64_t>(i) % n;
         return static_cast<int>(m < 0 ? m + n : m);
@@ -172,9 +175,9 @@ glm::vec3 bilinear(const float* rgb, int width, int height, const glm::vec2& uv)
     const auto ax = static_cast<float>(fx - x0f);
     const auto ay = static_cast<float>(fy - y0f);
     const int x0 = wrap_index(x0f, width);
-    const int x1 = wrap_index(x0f + 1.0, width);
+    const int x1 = x0 + 1 == width ? 0 : x0 + 1;
     const int y0 = wrap_index(y0f, height);
-    const int y1 = wrap_index(y0f + 1.0, height);
+    const int y1 = y0 + 1 == height ? 0 : y0 + 1;
     auto at = [&](int x, int y) {
         const std::size_t i = (static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
                                static_cast<std::size_t>(x)) *

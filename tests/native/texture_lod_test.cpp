@@ -3,6 +3,7 @@
 // the image reads its mean; odd sizes halve down to one texel; a far checkerboard in the ground
 // truth reads grey with filtered textures and aliases without them, and so do a simulated
 // scanner's points; one colour stays one colour.
+#include <algorithm>
 #include <cmath>
 #include <memory>
 #include <vector>
@@ -11,6 +12,7 @@
 
 #include "lfprobe/camera.hpp"
 #include "lfprobe/embree_scene.hpp"
+#include "lfprobe/error.hpp"
 #include "lfprobe/ground_truth.hpp"
 #include "lfprobe/mesh.hpp"
 #include "lfprobe/scanner_sim.hpp"
@@ -148,6 +150,52 @@ TEST(TextureLod, ARayWithoutSpreadIsTheUnfilteredHitBitForBit) {
     // A wide spread reads towards the checks' mean.
     const MeshHit wide = scene.intersect(ray, 0.05);
     EXPECT_NEAR(wide.base_color.x, 0.5f, 0.05f);
+}
+
+// The mesh bake traces a texel's strata in Embree's packets: every attribute of every hit
+// (and every miss) must be what single rays give, for full and partial packets and for rays
+// that leave the floor, so that a bake's maps do not depend on how its rays were grouped.
+TEST(TextureLod, RaysTracedInAPacketHitExactlyWhatSingleRaysHit) {
+    const Mesh mesh = checkered_floor(2.0, 4.0f);
+    const EmbreeScene scene(mesh);
+    std::vector<Ray> rays;
+    for (int i = 0; i < 21; ++i) {
+        Ray ray;
+        ray.origin = {0.1, -0.3, 1.2};
+        // Rays 0-16 fan out over the floor; the later ones point up and miss.
+        const double a = 0.15 * i;
+        ray.direction = glm::normalize(glm::dvec3(std::cos(a), std::sin(a), i < 17 ? -0.8 : 0.5));
+        rays.push_back(ray);
+    }
+    for (const double spread : {0.0, 0.004}) {
+        for (std::size_t first = 0; first < rays.size(); first += EmbreeScene::kPacket) {
+            const std::size_t count = std::min(EmbreeScene::kPacket, rays.size() - first);
+            std::vector<MeshHit> packet(EmbreeScene::kPacket);
+            packet[0].base_color = glm::vec3(7.0f); // what a previous packet left is overwritten
+            scene.intersect_packet(rays.data() + first, count, spread, packet.data());
+            for (std::size_t k = 0; k < count; ++k) {
+                const MeshHit one = scene.intersect(rays[first + k], spread);
+                const MeshHit& p = packet[k];
+                ASSERT_EQ(p.hit, one.hit) << "ray " << first + k;
+                if (!one.hit) {
+                    continue;
+                }
+                EXPECT_EQ(p.t, one.t);
+                EXPECT_EQ(p.triangle, one.triangle);
+                EXPECT_EQ(p.u, one.u);
+                EXPECT_EQ(p.v, one.v);
+                EXPECT_EQ(p.uv, one.uv);
+                EXPECT_EQ(p.geometric_normal, one.geometric_normal);
+                EXPECT_EQ(p.shading_normal, one.shading_normal);
+                EXPECT_EQ(p.base_color, one.base_color);
+                EXPECT_EQ(p.object, one.object);
+            }
+        }
+    }
+    std::vector<MeshHit> too_many(EmbreeScene::kPacket + 1);
+    std::vector<Ray> seventeen(EmbreeScene::kPacket + 1, rays[0]);
+    EXPECT_THROW(scene.intersect_packet(seventeen.data(), seventeen.size(), 0.0, too_many.data()),
+                 InputError);
 }
 
 // A scanner's colour comes from a camera whose pixel integrates what it covers: on checks much

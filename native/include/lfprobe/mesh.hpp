@@ -57,6 +57,14 @@ struct Mesh {
     // triangle (texture LOD: a ray's sample covers that much surface, so its colour is the
     // texture's mean over it, not one texel's). 0: base_color(tri, u, v) exactly.
     [[nodiscard]] glm::vec3 base_color(std::size_t tri, float u, float v, double footprint) const;
+    // How many of its texture's texels a metre spans on triangle `tri` (0 without a texture or
+    // on a degenerate triangle): base_color(tri, u, v, footprint) filters its texture over
+    // footprint × this many texels.
+    [[nodiscard]] double texture_density(std::size_t tri) const;
+    // base_color(tri, u, v, footprint) given texture_density(tri) × footprint: for callers that
+    // keep each triangle's density.
+    [[nodiscard]] glm::vec3 base_color_over_texels(std::size_t tri, float u, float v,
+                                                   double footprint_texels) const;
     // Sets `vertices` from world positions read in double: chooses the world offset by the
     // rule scans use (world_offset.hpp) and stores positions relative to it.
     void set_world_vertices(const std::vector<glm::dvec3>& world);
