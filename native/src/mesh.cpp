@@ -5,6 +5,7 @@
 #include <limits>
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/world_offset.hpp"

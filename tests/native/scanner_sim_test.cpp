@@ -1,13 +1,18 @@
 // The simulated scanner: ray count of the pattern, points on the mesh within the noise, and a
 // file the scan reader takes back with its scanner position.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <limits>
 #include <numbers>
+#include <string>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include "lfprobe/color.hpp"
 #include "lfprobe/mesh_reader.hpp"
 #include "lfprobe/scan_reader.hpp"
 #include "lfprobe/scanner_sim.hpp"
@@ -81,6 +86,49 @@ TEST(Scanner, PatternCountNoiseAndRoundTrip) {
     EXPECT_NEAR(file.colors[0].y, 0.0f, 1e-6f);
     const glm::dvec3 p0 = file.origin + glm::dvec3(file.positions[0]);
     EXPECT_NEAR(glm::length(p0 - points[0].position), 0.0, 1e-5);
+}
+
+// The .xyz lines are formatted on all cores with to_chars: each must be what printf's
+// "%.6f %.6f %.6f %d %d %d" makes of the point, over a room far from the origin (large
+// coordinates, both signs, the colour bytes of a red wall), in ray order.
+TEST(Scanner, WrittenLinesAreWhatPrintfWritesInRayOrder) {
+    Mesh mesh = closed_room();
+    for (glm::vec3& v : mesh.vertices) {
+        v += glm::vec3(-0.25f, 0.125f, 0.0f);
+    }
+    mesh.world_offset = {-452117.0, 5411630.0, 212.0};
+    mesh.materials[0].base_color = {0.6f, 0.02f, 0.3f};
+    const EmbreeScene scene(mesh);
+    ScannerSettings s;
+    s.position = mesh.world_offset + glm::dvec3(0.5, 0.5, 1.5);
+    s.step_deg = 3.0;
+    s.noise_mm = 2.0;
+    const std::vector<SimulatedPoint> points = simulate_scan(scene, s);
+    ASSERT_EQ(points.size(), 120u * 50u + 1u); // the closed room returns every ray
+    const auto path =
+        (std::filesystem::temp_directory_path() / "lfprobe_scanner_lines_test.xyz").string();
+    (void)write_simulated_scan(scene, s, path);
+    std::ifstream in(path);
+    std::string line;
+    std::size_t k = 0;
+    while (std::getline(in, line)) {
+        if (line.empty() || line[0] == '#') {
+            continue;
+        }
+        ASSERT_LT(k, points.size());
+        const SimulatedPoint& q = points[k++];
+        const auto byte = [](float linear) {
+            return static_cast<int>(
+                std::lround(linear_to_srgb(std::clamp(linear, 0.0f, 1.0f)) * 255.0f));
+        };
+        char expected[256];
+        std::snprintf(expected, sizeof expected, "%.6f %.6f %.6f %d %d %d", q.position.x,
+                      q.position.y, q.position.z, byte(q.color.x), byte(q.color.y),
+                      byte(q.color.z));
+        ASSERT_EQ(line, expected) << "point " << k - 1;
+    }
+    EXPECT_EQ(k, points.size());
+    std::filesystem::remove(path);
 }
 
 // A partial sweep: the scanner turns through 90° of azimuth from 30°, keeping the zenith; a
