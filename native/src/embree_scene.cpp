@@ -165,8 +165,33 @@ bool EmbreeScene::intersect_fast(const Ray& ray, float& t, std::uint32_t& triang
 
 namespace {
 
-// rtcIntersect4/8/16 over rays[0, count) in packets of `Packet`'s width: the rays' fields set
-// lane by lane, unused lanes of the last packet masked off.
+// Sets the lanes of `packet` to rays[first, first + Width) and `valid` to which of them lie
+// below `count`; unused lanes repeat the first ray, masked off.
+template <class Packet, std::size_t Width>
+void load_packet(Packet& packet, std::array<int, Width>& valid, const Ray* rays, std::size_t first,
+                 std::size_t count) {
+    for (std::size_t k = 0; k < Width; ++k) {
+        const std::size_t i = first + k;
+        valid[k] = i < count ? -1 : 0;
+        const RTCRayHit one = make_ray(rays[i < count ? i : first]);
+        packet.ray.org_x[k] = one.ray.org_x;
+        packet.ray.org_y[k] = one.ray.org_y;
+        packet.ray.org_z[k] = one.ray.org_z;
+        packet.ray.dir_x[k] = one.ray.dir_x;
+        packet.ray.dir_y[k] = one.ray.dir_y;
+        packet.ray.dir_z[k] = one.ray.dir_z;
+        packet.ray.tnear[k] = one.ray.tnear;
+        packet.ray.tfar[k] = one.ray.tfar;
+        packet.ray.mask[k] = one.ray.mask;
+        packet.ray.time[k] = 0.0f;
+        packet.ray.flags[k] = 0;
+        packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
+        packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
+    }
+}
+
+// rtcIntersect4/8/16 over rays[0, count) in packets of `Packet`'s width, unused lanes of the
+// last packet masked off.
 template <class Packet, int Width, class Intersect>
 std::uint64_t count_packet_hits(RTCScene scene, const Ray* rays, std::size_t count,
                                 Intersect&& intersect) {
@@ -176,25 +201,7 @@ std::uint64_t count_packet_hits(RTCScene scene, const Ray* rays, std::size_t cou
     alignas(64) Packet packet;
     alignas(64) std::array<int, Width> valid;
     for (std::size_t first = 0; first < count; first += Width) {
-        for (int k = 0; k < Width; ++k) {
-            const std::size_t i = first + static_cast<std::size_t>(k);
-            const std::size_t uk = static_cast<std::size_t>(k);
-            valid[uk] = i < count ? -1 : 0;
-            const RTCRayHit one = make_ray(rays[i < count ? i : first]);
-            packet.ray.org_x[k] = one.ray.org_x;
-            packet.ray.org_y[k] = one.ray.org_y;
-            packet.ray.org_z[k] = one.ray.org_z;
-            packet.ray.dir_x[k] = one.ray.dir_x;
-            packet.ray.dir_y[k] = one.ray.dir_y;
-            packet.ray.dir_z[k] = one.ray.dir_z;
-            packet.ray.tnear[k] = one.ray.tnear;
-            packet.ray.tfar[k] = one.ray.tfar;
-            packet.ray.mask[k] = one.ray.mask;
-            packet.ray.time[k] = 0.0f;
-            packet.ray.flags[k] = 0;
-            packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-            packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-        }
+        load_packet(packet, valid, rays, first, count);
         intersect(valid.data(), scene, &context, &packet);
         for (int k = 0; k < Width; ++k) {
             hits += valid[static_cast<std::size_t>(k)] != 0 &&
@@ -265,27 +272,14 @@ void EmbreeScene::intersect_packet(const Ray* rays, std::size_t count, double sp
     if (count > kPacket) {
         throw InputError("Embree: a packet holds at most 16 rays, got " + std::to_string(count));
     }
+    if (count == 0) {
+        return;
+    }
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
     alignas(64) RTCRayHit16 packet;
     alignas(64) std::array<int, kPacket> valid{};
-    for (std::size_t k = 0; k < kPacket; ++k) {
-        valid[k] = k < count ? -1 : 0;
-        const RTCRayHit one = make_ray(rays[k < count ? k : 0]);
-        packet.ray.org_x[k] = one.ray.org_x;
-        packet.ray.org_y[k] = one.ray.org_y;
-        packet.ray.org_z[k] = one.ray.org_z;
-        packet.ray.dir_x[k] = one.ray.dir_x;
-        packet.ray.dir_y[k] = one.ray.dir_y;
-        packet.ray.dir_z[k] = one.ray.dir_z;
-        packet.ray.tnear[k] = one.ray.tnear;
-        packet.ray.tfar[k] = one.ray.tfar;
-        packet.ray.mask[k] = one.ray.mask;
-        packet.ray.time[k] = 0.0f;
-        packet.ray.flags[k] = 0;
-        packet.hit.geomID[k] = RTC_INVALID_GEOMETRY_ID;
-        packet.hit.instID[0][k] = RTC_INVALID_GEOMETRY_ID;
-    }
+    load_packet(packet, valid, rays, 0, count);
     rtcIntersect16(valid.data(), impl_->scene, &context, &packet);
     // Each hit written in place: a MeshHit built on the stack and copied over stalled on its
     // partly overlapping stores (a tenth of a mesh bake).
