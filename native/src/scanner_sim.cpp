@@ -8,6 +8,7 @@
 #include <limits>
 #include <numbers>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include <glm/common.hpp>
@@ -171,7 +172,13 @@ constexpr std::size_t kMaxXyzLine = 3 * 24 + 3 * 4 + 1;
 char* format_xyz_line(char* first, const glm::dvec3& position, const glm::vec3& colour) {
     char* const last = first + kMaxXyzLine;
     for (int axis = 0; axis < 3; ++axis) {
-        first = std::to_chars(first, last, position[axis], std::chars_format::fixed, 6).ptr;
+        const std::to_chars_result written =
+            std::to_chars(first, last, position[axis], std::chars_format::fixed, 6);
+        if (written.ec != std::errc{}) {
+            throw InputError("simulated scan: a point's coordinate " +
+                             std::to_string(position[axis]) + " is too large to write");
+        }
+        first = written.ptr;
         *first++ = ' ';
     }
     for (int c = 0; c < 3; ++c) {
