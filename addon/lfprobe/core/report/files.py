@@ -7,7 +7,7 @@ import csv
 import io
 import json
 import os
-from typing import Dict, Iterable, List
+from typing import Callable, Collection, Dict, Iterable, List
 
 from .. import atomic_write
 from ..json_values import strict_json
@@ -54,3 +54,16 @@ def write_csv(path: str, rows: Iterable[Dict[str, object]]) -> None:
                 cells.append(str(value))
         writer.writerow(cells)
     write_text(path, out.getvalue())
+
+
+def remove_unwritten(folder: str, written: Collection[str], owned: Callable[[str], bool]) -> List[str]:
+    """Deletes the files of `folder` a run owns (`owned(name)`) but did not write this time (a
+    table of a section the preset skipped, an image of a view an earlier run had), so that the
+    folder shows this run alone; files the report never writes are left. Returns the names
+    removed, sorted."""
+    removed = []
+    for name in sorted(os.listdir(folder)):
+        if owned(name) and name not in written and os.path.isfile(os.path.join(folder, name)):
+            os.remove(os.path.join(folder, name))
+            removed.append(name)
+    return removed

@@ -20,6 +20,9 @@ from .sweep import Sweep, aggregate, pareto_front
 
 # What the section "Model only what a scene needs" writes beside report.html.
 PLANNING_TABLES = ("planning_resolution.csv", "planning_walk.csv", "planning_storage.csv", "planning_iterations.csv")
+# Every table _write_tables writes: what a later run may delete.
+REPORT_TABLES = ("sweep.csv", "sweep_views.csv", "distance.csv", "walk.csv", "at_probe.csv", "peers.csv",
+                 "stability.csv", "ground_truth.csv", "trace_against_embree.csv") + PLANNING_TABLES
 # The name prefixes of every image _write_images writes: what a later run may delete.
 REPORT_IMAGE_PREFIXES = ("speed_", "distance_", "resolution_", "at_probe_", "peers_", "planning_",
                          "triplet_", "confusion_")
@@ -217,26 +220,28 @@ def _write_tables(out_dir: str, data: Dict[str, object]) -> None:
     def without(rows, *keys):
         return [{k: v for k, v in r.items() if k not in keys} for r in rows]
 
-    files.write_csv(os.path.join(out_dir, "sweep.csv"), data["sweep"])
-    files.write_csv(os.path.join(out_dir, "sweep_views.csv"), without(data["sweep_views"], "confusion"))
-    files.write_csv(os.path.join(out_dir, "distance.csv"), without(data["distance"], "confusion"))
-    files.write_csv(os.path.join(out_dir, "walk.csv"), without(data["walk"], "confusion"))
-    files.write_csv(os.path.join(out_dir, "at_probe.csv"), data["at_probe"])
-    files.write_csv(os.path.join(out_dir, "peers.csv"), without(data["peers"]["rows"], "confusion"))
-    files.write_csv(os.path.join(out_dir, "stability.csv"), without(data["stability"], "series"))
-    files.write_csv(os.path.join(out_dir, "ground_truth.csv"), data["ground_truth"])
-    files.write_csv(os.path.join(out_dir, "trace_against_embree.csv"), data["trace_against_embree"])
+    tables = {
+        "sweep.csv": data["sweep"],
+        "sweep_views.csv": without(data["sweep_views"], "confusion"),
+        "distance.csv": without(data["distance"], "confusion"),
+        "walk.csv": without(data["walk"], "confusion"),
+        "at_probe.csv": data["at_probe"],
+        "peers.csv": without(data["peers"]["rows"], "confusion"),
+        "stability.csv": without(data["stability"], "series"),
+        "ground_truth.csv": data["ground_truth"],
+        "trace_against_embree.csv": data["trace_against_embree"],
+    }
     plan = data["planning"]
-    if plan is None:  # the preset does not run the planning section: none left from a run that did
-        for name in PLANNING_TABLES:
-            if os.path.exists(os.path.join(out_dir, name)):
-                os.remove(os.path.join(out_dir, name))
-        return
-    files.write_csv(os.path.join(out_dir, "planning_resolution.csv"), plan["resolution"]["rows"])
-    files.write_csv(os.path.join(out_dir, "planning_walk.csv"), plan["placement_frames"])
-    files.write_csv(os.path.join(out_dir, "planning_storage.csv"), plan.get("storage", []))
-    files.write_csv(os.path.join(out_dir, "planning_iterations.csv"),
-                    without(plan["placement"]["adaptive"]["iterations"], "unknown_rate_per_view"))
+    if plan is not None:  # a preset that skips the section writes none of its tables
+        tables.update({
+            "planning_resolution.csv": plan["resolution"]["rows"],
+            "planning_walk.csv": plan["placement_frames"],
+            "planning_storage.csv": plan.get("storage", []),
+            "planning_iterations.csv": without(plan["placement"]["adaptive"]["iterations"], "unknown_rate_per_view"),
+        })
+    for name, rows in tables.items():
+        files.write_csv(os.path.join(out_dir, name), rows)
+    files.remove_unwritten(out_dir, tables, lambda name: name in REPORT_TABLES)
 
 
 def _write_images(ctx: RunContext, sweep: Sweep, data, splat_images, poisson_images) -> Dict[str, bytes]:
@@ -281,12 +286,6 @@ def _write_images(ctx: RunContext, sweep: Sweep, data, splat_images, poisson_ima
 
 def remove_stale_images(images_dir: str, written: Collection[str]) -> List[str]:
     """Deletes the report's own images that this run did not write (a triplet of a view or
-    setting an earlier run had, a plot this run had no data for), so that the folder shows
-    this run alone; files the report never writes are left. Returns the names removed."""
-    removed = []
-    for name in sorted(os.listdir(images_dir)):
-        owned = name.endswith(".png") and name.startswith(REPORT_IMAGE_PREFIXES)
-        if owned and name not in written:
-            os.remove(os.path.join(images_dir, name))
-            removed.append(name)
-    return removed
+    setting an earlier run had, a plot this run had no data for); returns the names removed."""
+    return files.remove_unwritten(images_dir, written,
+                                  lambda name: name.endswith(".png") and name.startswith(REPORT_IMAGE_PREFIXES))
