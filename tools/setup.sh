@@ -11,7 +11,7 @@ packages=(
   cmake ninja-build g++ python3-dev python3-numpy python3-pytest
   pybind11-dev libembree-dev libopenexr-dev libglm-dev libtbb-dev
   nlohmann-json3-dev libfast-float-dev libgtest-dev libstb-dev libxxhash-dev libdeflate-dev
-  python3-skimage python3-pip python3-matplotlib python3-open3d python3-distributed blender xvfb
+  python3-scipy python3-skimage python3-pip python3-matplotlib python3-open3d python3-distributed blender xvfb
   xauth xdotool clang-format clang libclang-rt-14-dev llvm
 )
 missing=()

@@ -260,3 +260,27 @@ def test_lfprobe_compare_when_wired(views):
     assert REQUIRED_KEYS <= set(json.loads(result.stdout))
     mismatch = run_cli("compare", views["render"], views["small"])
     assert mismatch.returncode == 2
+
+
+def test_scipys_correlation_and_the_numpy_sums_give_the_same_filtered_images():
+    """The metrics filter with scipy.ndimage where it is installed and with numpy sums where it is
+    not (Blender's bundled Python): both paths, edge-clamped and valid-region, on an image whose
+    borders differ from its inside, agree to rounding."""
+    from lfprobe.core import image_filters
+
+    if not image_filters.have_scipy():
+        pytest.skip("scipy is not installed: only the numpy path runs here")
+    rng = np.random.default_rng(7)
+    image = rng.random((37, 53, 3))
+    image[:, 0] = 5.0  # a bright border column: the clamp must read it
+    for weights in (flip_module.feature_filters(67.0)[1], np.array([0.25, 0.5, 0.25]),
+                    metrics._gaussian_window_1d()):
+        for axis in (0, 1):
+            fast = image_filters.correlate_edge(image, weights, axis)
+            slow = image_filters.correlate_edge(image, weights, axis, use_scipy=False)
+            assert fast.shape == image.shape
+            np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-12)
+        fast = image_filters.correlate_valid(image, weights)
+        slow = image_filters.correlate_valid(image, weights, use_scipy=False)
+        assert fast.shape == slow.shape == (37 - len(weights) + 1, 53 - len(weights) + 1, 3)
+        np.testing.assert_allclose(fast, slow, rtol=0, atol=1e-12)

@@ -1,5 +1,5 @@
 """LDR-FLIP, the perceptual image difference of Andersson et al. 2020 ("FLIP: A Difference
-Evaluator for Alternating Images", HPG 2020), written in numpy (no scipy, no bpy).
+Evaluator for Alternating Images", HPG 2020), written in numpy (scipy's 1D correlation where it is installed; no bpy).
 
 Inputs are sRGB-encoded images in [0, 1] (h, w, 3). The error map is in [0, 1]; its mean is the
 FLIP figure. The steps and constants follow the paper and NVIDIA's reference code (the
@@ -36,6 +36,8 @@ import math
 from typing import Tuple
 
 import numpy as np
+
+from .image_filters import correlate_edge
 
 DEFAULT_PPD = 67.0  # pixels per degree: 0.7 m from a 0.7 m wide 3840-pixel screen is 67.02
 
@@ -120,16 +122,7 @@ def max_color_distance() -> float:
 
 def _correlate_axis(image: np.ndarray, weights: np.ndarray, axis: int) -> np.ndarray:
     """Σ_k weights[k]·image[i + k − r] along axis (0 rows, 1 columns), borders clamped to the edge."""
-    radius = len(weights) // 2
-    pad = [(0, 0)] * image.ndim
-    pad[axis] = (radius, radius)
-    padded = np.pad(image, pad, mode="edge")
-    n = image.shape[axis]
-    out = np.zeros(image.shape, dtype=np.float64)
-    for k, weight in enumerate(weights):
-        if weight != 0.0:
-            out += weight * (padded[k : k + n] if axis == 0 else padded[:, k : k + n])
-    return out
+    return correlate_edge(image, weights, axis)
 
 
 def spatial_filter_radius(ppd: float) -> int:

@@ -1,6 +1,6 @@
 """Image metrics for comparing a rendered view with ground truth (docs/DESIGN.md §6).
 
-Pure numpy (no bpy, no scipy). Every figure is defined in the docstring of the function that
+numpy, with scipy's 1D correlation where it is installed (image_filters.py); no bpy. Every figure is defined in the docstring of the function that
 computes it, and `DEFINITIONS` repeats the definitions that `compare --json` prints.
 
 Colour metrics work on sRGB-encoded colour: the linear RGB of the EXR is clamped to [0, 1] and
@@ -15,6 +15,7 @@ from typing import Dict, Optional, Tuple
 import numpy as np
 
 from . import flip as _flip
+from .image_filters import correlate_valid
 from .colour import srgb_encode  # noqa: F401  (metrics.srgb_encode: what the figures encode with)
 
 STATUS_MISS, STATUS_HIT, STATUS_UNKNOWN = 0, 1, 2
@@ -63,7 +64,10 @@ def _check_pair(ref: np.ndarray, test: np.ndarray) -> None:
 def psnr(ref_rgb: np.ndarray, test_rgb: np.ndarray) -> float:
     """PSNR in dB of two linear RGB images, on sRGB-encoded clamped colour with data range 1:
     10·log10(1 / MSE), MSE over all pixels and channels; +inf when the encoded images are equal."""
-    ref, test = srgb_encode(ref_rgb), srgb_encode(test_rgb)
+    return _psnr_encoded(srgb_encode(ref_rgb), srgb_encode(test_rgb))
+
+
+def _psnr_encoded(ref: np.ndarray, test: np.ndarray) -> float:
     _check_pair(ref, test)
     mse = float(np.mean((ref - test) ** 2))
     return math.inf if mse == 0.0 else 10.0 * math.log10(1.0 / mse)
@@ -79,10 +83,7 @@ def _gaussian_window_1d() -> np.ndarray:
 def _valid_filter(image: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """Separable correlation of (h, w, ...) with weights on both axes, valid region only
     (output shrinks by len(weights) − 1 on each axis)."""
-    n = len(weights)
-    h, w = image.shape[0] - n + 1, image.shape[1] - n + 1
-    rows = sum(weights[k] * image[k : k + h] for k in range(n))
-    return sum(weights[k] * rows[:, k : k + w] for k in range(n))
+    return correlate_valid(image, weights)
 
 
 def ssim_map(ref_srgb: np.ndarray, test_srgb: np.ndarray) -> np.ndarray:
@@ -210,13 +211,15 @@ def compare_images(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
 
 def _colour_figures(ref_rgb: np.ndarray, test_rgb: np.ndarray,
                     ppd: float) -> Tuple[Dict[str, object], np.ndarray]:
-    """({psnr, ssim, flip}, FLIP error map) of two colour images; ssim None under its window."""
+    """({psnr, ssim, flip}, FLIP error map) of two colour images; ssim None under its window.
+    Each image is sRGB-encoded once for the three (what psnr, ssim and flip each do)."""
+    ref, test = srgb_encode(ref_rgb), srgb_encode(test_rgb)
     try:
-        ssim_value: Optional[float] = ssim(ref_rgb, test_rgb)
+        ssim_value: Optional[float] = float(ssim_map(ref, test).mean(axis=(0, 1)).mean())
     except ValueError:
         ssim_value = None
-    flip_mean, error_map = flip(ref_rgb, test_rgb, ppd)
-    return {"psnr": psnr(ref_rgb, test_rgb), "ssim": ssim_value, "flip": flip_mean}, error_map
+    flip_mean, error_map = _flip.flip(ref, test, ppd)
+    return {"psnr": _psnr_encoded(ref, test), "ssim": ssim_value, "flip": flip_mean}, error_map
 
 
 def compare_images_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
