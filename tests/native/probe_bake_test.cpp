@@ -772,6 +772,57 @@ TEST(ProbeBake, ASplatsFringeFillsOnlyWhereNoSurfacesCoreReaches) {
     EXPECT_GT(nearest_wins, 0.5);
 }
 
+TEST(ProbeBake, AThinObjectBeforeAWallDoesNotGrowOverTheTexelsItOnlyTouches) {
+    // A plate sampled every 2 mm, 0.6 m from the probe, before a wall 3 m away sampled every
+    // 1 cm: at 256² several points of each fall in a texel. The plate ends between its last
+    // points (0.201 m off its centre line) and the next, missing ones (0.203 m). A texel whose
+    // centre's ray passes the plate's plane further out sees the wall, though the plate's last
+    // points may still fall inside it. Every point claimed its own texel, and the nearest
+    // surface won: the plate grew over such texels along its whole silhouette (as foreground
+    // objects did in the lab room's scan-baked probes, the most of its 1 % of pixels on the
+    // wrong surface). A point's own texel whose centre lies past its surface's edge, or outside
+    // its disc, is now claimed only where no other surface is known, as any texel there.
+    PointCloud cloud;
+    add_wall_x(cloud, 0.6f, 0.002f, 0.002f, 0.201f);
+    const std::size_t plate_points = cloud.positions.size();
+    add_wall_x(cloud, 3.0f, 0.01f, 0.01f, 1.5f);
+    cloud.scans.push_back(
+        ScanSource{"plate and wall", cloud.positions.size(), glm::dvec3(0.0), true});
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    BakeSettings settings;
+    settings.resolution = 256;
+    settings.hole_fill_texels = 0;
+    const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+    const int n = map.resolution;
+    std::vector<std::uint8_t> holds_plate_point(map.texel_count(), 0);
+    for (std::size_t i = 0; i < plate_points; ++i) {
+        const oct::Texel t = oct::texel_of_direction(glm::normalize(cloud.positions[i]), n);
+        holds_plate_point[oct::texel_index(t, n)] = 1;
+    }
+    std::size_t beside = 0;
+    std::size_t plate_beside = 0;
+    std::size_t inside = 0;
+    std::size_t plate_inside = 0;
+    for_each_texel_on_wall_x(
+        map, glm::vec3(0.0f), 0.6f, [](const glm::vec3& p) { return std::abs(p.z) <= 0.15f; },
+        [&](std::size_t i, const glm::vec3& p) {
+            const bool plate = map.distance[i] < 1.0f;
+            if (std::abs(p.y) >= 0.2035f && holds_plate_point[i] != 0) {
+                ++beside;
+                plate_beside += plate ? 1 : 0;
+            } else if (std::abs(p.y) <= 0.196f) {
+                ++inside;
+                plate_inside += plate ? 1 : 0;
+            }
+        });
+    std::printf("texels holding plate points whose centre's ray passes beside the plate: %zu of "
+                "%zu show the plate; inside it %zu of %zu\n",
+                plate_beside, beside, plate_inside, inside);
+    ASSERT_GT(beside, 10u);
+    EXPECT_EQ(plate_beside, 0u);
+    EXPECT_EQ(plate_inside, inside); // the plate keeps every texel it covers
+}
+
 TEST(LocalGeometry, PointsAtASurfacesEdgeKnowWhereItsInsideIs) {
     PointCloud cloud;
     add_wall_x(cloud, 0.6f, 0.02f, 0.02f, 0.2f); // 21 × 21 points, y and z from -0.2 to 0.2
