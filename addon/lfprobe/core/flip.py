@@ -1,5 +1,6 @@
 """LDR-FLIP, the perceptual image difference of Andersson et al. 2020 ("FLIP: A Difference
-Evaluator for Alternating Images", HPG 2020), written in numpy (scipy's 1D correlation where it is installed; no bpy).
+Evaluator for Alternating Images", HPG 2020), written in numpy (its filters through scipy's 1D
+correlation where scipy is installed: image_filters.py; no bpy).
 
 Inputs are sRGB-encoded images in [0, 1] (h, w, 3). The error map is in [0, 1]; its mean is the
 FLIP figure. The steps and constants follow the paper and NVIDIA's reference code (the

@@ -1,7 +1,8 @@
 """Image metrics for comparing a rendered view with ground truth (docs/DESIGN.md §6).
 
-numpy, with scipy's 1D correlation where it is installed (image_filters.py); no bpy. Every figure is defined in the docstring of the function that
-computes it, and `DEFINITIONS` repeats the definitions that `compare --json` prints.
+numpy, with scipy's 1D correlation where it is installed (image_filters.py); no bpy. Every
+figure is defined in the docstring of the function that computes it, and `DEFINITIONS` repeats
+the definitions that `compare --json` prints.
 
 Colour metrics work on sRGB-encoded colour: the linear RGB of the EXR is clamped to [0, 1] and
 passed through the sRGB curve (`srgb_encode`), so the data range is 1.
