@@ -534,10 +534,9 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
             if (!own && has_plane && !hit.in_disc) {
                 return;
             }
-            hit.fringe = !own && glm::dot(texel_dir, p.dir) < core_cosine();
-            if (own && has_plane && !hit.in_disc) {
-                hit.fringe = true; // its centre lies off the point's disc: fills, as a fringe
-            }
+            // Its own texel: a fringe where the texel's centre lies off the point's disc.
+            hit.fringe =
+                own ? has_plane && !hit.in_disc : glm::dot(texel_dir, p.dir) < core_cosine();
             hit.own = own;
             visit(t, p, hit);
         };

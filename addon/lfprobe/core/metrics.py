@@ -116,7 +116,11 @@ def ssim(ref_rgb: np.ndarray, test_rgb: np.ndarray) -> float:
     mean of each channel's map over the valid region, then the mean over channels. Equals
     skimage.metrics.structural_similarity(channel_axis=2, gaussian_weights=True, sigma=1.5,
     use_sample_covariance=False, data_range=1) on the encoded images."""
-    return float(ssim_map(srgb_encode(ref_rgb), srgb_encode(test_rgb)).mean(axis=(0, 1)).mean())
+    return _ssim_encoded(srgb_encode(ref_rgb), srgb_encode(test_rgb))
+
+
+def _ssim_encoded(ref: np.ndarray, test: np.ndarray) -> float:
+    return float(ssim_map(ref, test).mean(axis=(0, 1)).mean())
 
 
 def flip(ref_rgb: np.ndarray, test_rgb: np.ndarray, ppd: float = _flip.DEFAULT_PPD) -> Tuple[float, np.ndarray]:
@@ -216,7 +220,7 @@ def _colour_figures(ref_rgb: np.ndarray, test_rgb: np.ndarray,
     Each image is sRGB-encoded once for the three (what psnr, ssim and flip each do)."""
     ref, test = srgb_encode(ref_rgb), srgb_encode(test_rgb)
     try:
-        ssim_value: Optional[float] = float(ssim_map(ref, test).mean(axis=(0, 1)).mean())
+        ssim_value: Optional[float] = _ssim_encoded(ref, test)
     except ValueError:
         ssim_value = None
     flip_mean, error_map = _flip.flip(ref, test, ppd)
