@@ -34,6 +34,8 @@ py::dict render_stats_dict(const RenderStats& s) {
     d["unknown"] = s.unknown;
     d["steps"] = s.steps;
     d["probes_tried"] = s.probes_tried;
+    d["holes_filled"] = s.holes_filled;
+    d["holes_left"] = s.holes_left;
     d["seconds"] = s.seconds;
     d["rays_per_second"] = s.rays_per_second();
     d["mean_steps"] = s.mean_steps();
@@ -58,6 +60,7 @@ struct Fidelity {
     int spp = RenderSettings{}.samples_per_pixel;
     std::string filter = radiance_filter_name(FieldTraceSettings{}.filter);
     int blend = FieldTraceSettings{}.blend;
+    int hole_fill = RenderSettings{}.hole_fill_pixels;
 };
 
 RenderSettings render_settings(const std::string& mode, double thickness, bool use_coarse_levels,
@@ -76,6 +79,7 @@ RenderSettings render_settings(const std::string& mode, double thickness, bool u
     settings.samples_per_pixel = fidelity.spp;
     settings.trace.filter = radiance_filter_from_name(fidelity.filter);
     settings.trace.blend = fidelity.blend;
+    settings.hole_fill_pixels = fidelity.hole_fill;
     return settings;
 }
 
@@ -178,10 +182,10 @@ void bind_render(py::module_& m) {
                const std::string& mode, int threads, double thickness, bool use_coarse_levels,
                int tile_size, int spp, const std::string& filter, int blend,
                double fallback_thickness, int max_probes_per_ray,
-               bool stop_where_no_probe_can_answer) {
+               bool stop_where_no_probe_can_answer, int hole_fill) {
                 const Camera cam = camera_from(camera);
                 const RenderSettings settings = render_settings(
-                    mode, thickness, use_coarse_levels, tile_size, {spp, filter, blend},
+                    mode, thickness, use_coarse_levels, tile_size, {spp, filter, blend, hole_fill},
                     fallback_thickness, max_probes_per_ray, stop_where_no_probe_can_answer);
                 using Result = std::pair<RenderedImage, RenderStats>;
                 return std::make_unique<Job>(
@@ -205,6 +209,7 @@ void bind_render(py::module_& m) {
             py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
             py::arg("max_probes_per_ray") = FieldTraceSettings{}.max_probes_per_ray,
             py::arg("stop_where_no_probe_can_answer") = true,
+            py::arg("hole_fill") = Fidelity{}.hole_fill,
             "Start tracing a view in the background (the Blender engine's F12): a Job with "
             "progress in pixels, cancel(), and result() = (image dict, stats dict) as render() "
             "returns.")
@@ -214,10 +219,10 @@ void bind_render(py::module_& m) {
                const std::string& output, const std::string& mode, int threads, double thickness,
                bool use_coarse_levels, int tile_size, int spp, const std::string& filter, int blend,
                double fallback_thickness, int max_probes_per_ray,
-               bool stop_where_no_probe_can_answer) {
+               bool stop_where_no_probe_can_answer, int hole_fill) {
                 const Camera cam = camera_from(camera);
                 const RenderSettings settings = render_settings(
-                    mode, thickness, use_coarse_levels, tile_size, {spp, filter, blend},
+                    mode, thickness, use_coarse_levels, tile_size, {spp, filter, blend, hole_fill},
                     fallback_thickness, max_probes_per_ray, stop_where_no_probe_can_answer);
                 RenderStats stats;
                 RenderedImage image;
@@ -238,25 +243,27 @@ void bind_render(py::module_& m) {
             py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
             py::arg("max_probes_per_ray") = FieldTraceSettings{}.max_probes_per_ray,
             py::arg("stop_where_no_probe_can_answer") = true,
+            py::arg("hole_fill") = Fidelity{}.hole_fill,
             "Trace a view (camera: a JSON path or text); returns (image dict, stats dict) and "
             "writes the EXR when output is given. threads=0 uses every core. spp: samples per "
             "pixel (1 or a square; colour and coverage averaged, the rest from the pixel "
             "centre); filter: \"nearest\" or \"bilinear\" (a HIT's colour from its texel or "
             "interpolated over the same surface); blend: probes a HIT's colour is blended from "
             "(1: the answering probe alone); max_probes_per_ray: at most that many probes asked "
-            "about a "
-            "ray (0: no bound; a bound is not exact).");
+            "about a ray (0: no bound; a bound is not exact); hole_fill: holes of UNKNOWN pixels "
+            "at most that many pixels across are coloured from the HIT pixels around them, "
+            "their status kept (-1: 5 % of the image's larger side; 0: off).");
 
     m.def(
         "start_render",
         [](const std::string& folder, const std::string& camera, const std::string& output,
            const std::string& mode, int threads, double thickness, bool use_coarse_levels,
            const py::object& storage, double distance_step, int spp, const std::string& filter,
-           int blend, double fallback_thickness, int max_probes_per_ray) {
+           int blend, double fallback_thickness, int max_probes_per_ray, int hole_fill) {
             const Camera cam = camera_from(camera);
-            const RenderSettings settings =
-                render_settings(mode, thickness, use_coarse_levels, 32, {spp, filter, blend},
-                                fallback_thickness, max_probes_per_ray);
+            const RenderSettings settings = render_settings(mode, thickness, use_coarse_levels, 32,
+                                                            {spp, filter, blend, hole_fill},
+                                                            fallback_thickness, max_probes_per_ray);
             const std::optional<ProbeStorage> chosen = storage_from(storage, distance_step);
             return std::make_unique<Job>(
                 std::function<RenderStats(Progress&)>([=](Progress& progress) {
@@ -275,6 +282,7 @@ void bind_render(py::module_& m) {
         py::arg("filter") = Fidelity{}.filter, py::arg("blend") = Fidelity{}.blend,
         py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
         py::arg("max_probes_per_ray") = FieldTraceSettings{}.max_probes_per_ray,
+        py::arg("hole_fill") = Fidelity{}.hole_fill,
         "Start rendering the probe set in `folder` from `camera` (JSON path or text) into the EXR "
         "`output`; the Job's result is the stats dict. storage as for ProbeField.load.");
 

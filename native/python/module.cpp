@@ -216,6 +216,7 @@ py::dict defaults_dict() {
     trace["blend"] = render.trace.blend;
     trace["spp"] = render.samples_per_pixel;
     trace["tile_size"] = render.tile_size;
+    trace["hole_fill"] = render.hole_fill_pixels;
     py::dict baking;
     baking["resolution"] = bake.resolution;
     baking["splat_scale"] = as_written(bake.splat_scale);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <optional>
 #include <vector>
@@ -16,6 +17,7 @@
 #include "lfprobe/probe_blend.hpp"
 #include "lfprobe/probe_lookup.hpp"
 #include "lfprobe/radiance_filter.hpp"
+#include "lfprobe/unknown_fill.hpp"
 
 namespace lfprobe {
 
@@ -26,6 +28,8 @@ nlohmann::json RenderStats::to_json() const {
                           {"unknown", unknown},
                           {"steps", steps},
                           {"probes_tried", probes_tried},
+                          {"holes_filled", holes_filled},
+                          {"holes_left", holes_left},
                           {"seconds", seconds},
                           {"rays_per_second", rays_per_second()},
                           {"mean_steps", mean_steps()},
@@ -47,6 +51,7 @@ nlohmann::json render_settings_json(const RenderSettings& settings) {
         {"filter", radiance_filter_name(settings.trace.filter)},
         {"blend", settings.trace.blend},
         {"samples_per_pixel", settings.samples_per_pixel},
+        {"hole_fill_pixels", settings.hole_fill_pixels},
         {"tile_size", settings.tile_size},
         {"sample", {settings.sample_x, settings.sample_y}}};
 }
@@ -276,9 +281,11 @@ struct SampleMean {
     glm::vec3 first{0.0f};
     glm::vec3 sum{0.0f};
     int hits = 0;
+    int unknown = 0;
 
     void add(const FieldTraceResult& h) {
         if (h.status != TraceStatus::Hit) {
+            unknown += h.status == TraceStatus::Unknown ? 1 : 0;
             return;
         }
         if (hits == 0) {
@@ -342,6 +349,11 @@ void require_valid_trace_settings(const RenderSettings& settings) {
           settings.sample_y <= 1.0)) {
         throw InputError("render: the sample position must lie in the pixel (0 to 1)");
     }
+    if (settings.hole_fill_pixels < -1) {
+        throw InputError("render: hole_fill_pixels must be -1 (the default width), 0 (off) or a "
+                         "width in pixels (got " +
+                         std::to_string(settings.hole_fill_pixels) + ")");
+    }
 }
 
 } // namespace
@@ -360,6 +372,8 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
     RenderedImage image(camera.width, camera.height);
     // Probe traces per pixel, summed after the parallel loop (no shared counters).
     std::vector<std::uint32_t> probes_tried(image.pixel_count(), 0);
+    // The share of each pixel's samples that ended UNKNOWN: what the hole fill colours.
+    std::vector<float> unknown_share(image.pixel_count(), 0.0f);
     if (progress != nullptr) {
         progress->begin_stage("tracing", image.pixel_count());
     }
@@ -393,6 +407,7 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
                             if (hit.status == TraceStatus::Hit) {
                                 set_colour(image, i, hit.radiance, 1.0f);
                             }
+                            unknown_share[i] = hit.status == TraceStatus::Unknown ? 1.0f : 0.0f;
                             continue;
                         }
                         // The n×n strata of the pixel, in the ground truth's order.
@@ -439,6 +454,8 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
                         const int samples = n * n;
                         set_colour(image, i, mean.colour(samples),
                                    static_cast<float>(mean.hits) / static_cast<float>(samples));
+                        unknown_share[i] =
+                            static_cast<float>(mean.unknown) / static_cast<float>(samples);
                         image.steps[i] = steps;
                         probes_tried[i] = tried;
                     }
@@ -446,9 +463,20 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
                 }
             }
         });
+    // The holes filled after every pixel is traced (a fill reads the pixels around a hole);
+    // its time is part of the frame's.
+    const auto fill_start = std::chrono::steady_clock::now();
+    const int fill_width = settings.hole_fill_pixels < 0
+                               ? default_hole_fill_pixels(camera.width, camera.height)
+                               : settings.hole_fill_pixels;
+    const UnknownFillStats filled = fill_unknown_pixels(image, unknown_share, fill_width);
+    const double fill_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - fill_start).count();
     if (stats != nullptr) {
         *stats = stats_of(image);
-        stats->seconds = seconds;
+        stats->seconds = seconds + fill_seconds;
+        stats->holes_filled = filled.pixels_filled;
+        stats->holes_left = filled.pixels_left;
         const std::uint64_t per_pixel =
             static_cast<std::uint64_t>(n * n) + (n > 1 && !centre_is_sample ? 1 : 0);
         stats->rays = image.pixel_count() * per_pixel;

@@ -225,9 +225,11 @@ def test_engine_settings_choose_the_grid():
     scene.lfprobe_render.threads = 1
     assert probe_view.trace_settings(scene) == {"mode": "nearest", "thickness": scene.lfprobe_render.thickness,
                                                 "fallback_thickness": scene.lfprobe_render.fallback_thickness,
-                                                "threads": 1, "filter": "bilinear", "blend": 4}
+                                                "threads": 1, "filter": "bilinear", "blend": 4, "hole_fill": -1}
     scene.lfprobe_render.radiance_filter = "nearest"
     scene.lfprobe_render.blend = 1
+    scene.lfprobe_render.fill_holes = False
+    assert probe_view.trace_settings(scene)["hole_fill"] == 0  # UNKNOWN pixels black
     scene.lfprobe_render.samples = 3
     assert probe_view.trace_settings(scene)["filter"] == "nearest" and probe_view.trace_settings(scene)["blend"] == 1
     assert probe_view.pixel_samples(scene) == 9

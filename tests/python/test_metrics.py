@@ -160,20 +160,26 @@ def test_confusion_on_hand_made_arrays():
     assert all_hit["hole_rate"] == 0.0 and all_hit["false_hit_rate"] == 0.0 and all_hit["false_miss_rate"] == 0.0
 
 
-def test_compare_images_blacks_out_non_hits():
+def test_compare_images_measures_colour_as_rendered_and_counts_holes_by_status():
     h, w = 24, 32
     colour = np.concatenate([_base_image(h, w), np.ones((h, w, 1))], axis=-1).astype(np.float32)
     depth = np.full((h, w), 2.0, np.float32)
     ref = {"rgba": colour, "depth": depth, "status": np.ones((h, w), np.uint8)}
     test_status = np.ones((h, w), np.uint8)
-    test_status[:, :8] = 2  # UNKNOWN: drawn black whatever colour the renderer left there
-    test = {"rgba": colour, "depth": depth, "status": test_status}
-    result = metrics.compare_images(ref, test)
-    black = dict(ref, rgba=np.where(test_status[..., None] == 1, colour, 0.0))
-    assert result["psnr"] == pytest.approx(metrics.psnr(colour[..., :3], black["rgba"][..., :3]))
-    assert result["hole_rate"] == pytest.approx(0.25) and result["unknown_rate"] == pytest.approx(0.25)
-    assert result["false_miss_rate"] == 0.0 and result["depth_absrel"] == 0.0
-    assert result["depth_pixels"] == h * (w - 8)
+    test_status[:, :8] = 2  # UNKNOWN
+    # Left black, as a render without the hole fill leaves UNKNOWN samples: an error.
+    black = np.where(test_status[..., None] == 1, colour, 0.0).astype(np.float32)
+    result = metrics.compare_images(ref, {"rgba": black, "depth": depth, "status": test_status})
+    assert result["psnr"] == pytest.approx(metrics.psnr(colour[..., :3], black[..., :3]))
+    assert result["psnr_answered"] == float("inf")
+    # Coloured by the hole fill, here exactly: the picture is right, the status still says the
+    # probes did not answer there.
+    result = metrics.compare_images(ref, {"rgba": colour, "depth": depth, "status": test_status})
+    assert result["psnr"] == float("inf")
+    for figures in (result, metrics.compare_images(ref, {"rgba": black, "depth": depth, "status": test_status})):
+        assert figures["hole_rate"] == pytest.approx(0.25) and figures["unknown_rate"] == pytest.approx(0.25)
+        assert figures["false_miss_rate"] == 0.0 and figures["depth_absrel"] == 0.0
+        assert figures["depth_pixels"] == h * (w - 8)
     assert set(metrics.DEFINITIONS) <= set(result["definitions"])
 
 

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 
+from ..core import defaults
 from ..core.probe_set import read_manifest
 from ..core.trace_target import TraceSetupError, TraceTarget, load_field  # noqa: F401  (importable here)
 from . import camera_export
@@ -93,7 +94,8 @@ def trace_settings(scene) -> dict:
     settings = render_settings(scene)
     return {"mode": settings.mode.lower(), "thickness": float(settings.thickness),
             "fallback_thickness": float(settings.fallback_thickness), "threads": int(settings.threads),
-            "filter": settings.radiance_filter, "blend": int(settings.blend)}
+            "filter": settings.radiance_filter, "blend": int(settings.blend),
+            "hole_fill": defaults.trace("hole_fill") if settings.fill_holes else 0}
 
 
 def pixel_samples(scene) -> int:

@@ -29,8 +29,9 @@ SSIM_K1, SSIM_K2 = 0.01, 0.03
 WRONG_SURFACE_RELATIVE = 0.05
 
 DEFINITIONS = {
-    "colour": "RGB of each image with every pixel whose status is not HIT set to black, clamped to "
-              "[0,1] and sRGB-encoded; data range 1",
+    "colour": "RGB of each image as rendered: each pixel the mean of its samples, a sample that is "
+              "not HIT adding black unless the hole fill of the render coloured it (its status stays UNKNOWN); "
+              "clamped to [0,1] and sRGB-encoded; data range 1",
     "psnr": "10·log10(1/MSE) over all pixels and the three channels of the sRGB colour, in dB; "
             "infinite when the images are identical (null in compare --json)",
     "ssim": "SSIM per channel (11×11 Gaussian window σ=1.5, K1=0.01, K2=0.03, population "
@@ -203,9 +204,13 @@ def wrong_surface_rate(ref_depth: np.ndarray, test_depth: np.ndarray, ref_hit: n
 
 
 def visible_colour(image: Dict[str, np.ndarray]) -> np.ndarray:
-    """Linear RGB of a read_image dict with every pixel that is not HIT set to black."""
-    rgb = np.asarray(image["rgba"], dtype=np.float64)[..., :3]
-    return np.where((np.asarray(image["status"]) == STATUS_HIT)[..., None], rgb, 0.0)
+    """Linear RGB of a read_image dict as the image shows it. lfprobe's renders store colour
+    premultiplied by coverage, each pixel the mean of its samples with the samples that are not
+    HIT black (or given the hole fill's colour), so nothing is masked here: a pixel whose centre
+    ray is UNKNOWN or MISS keeps the colour its other samples gave it, as the ground truth's
+    pixel keeps its own. (Masking by the centre's status, as before, blacked out 15 of 16 HIT
+    samples of a pixel whose centre alone was UNKNOWN, and a filled hole's colour.)"""
+    return np.asarray(image["rgba"], dtype=np.float64)[..., :3]
 
 
 def compare_images(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
@@ -231,8 +236,7 @@ def compare_images_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarr
                             ppd: float = _flip.DEFAULT_PPD) -> Tuple[Dict[str, object], np.ndarray]:
     """(metrics, FLIP error map) between a ground-truth and a test image (read_image dicts of one size).
 
-    Colour metrics (psnr, ssim, flip) use every pixel, with pixels that are not HIT black in both
-    images. ssim is None for images under 11 pixels on a side. Returns psnr, ssim, flip,
+    Colour metrics (psnr, ssim, flip) use every pixel's colour as rendered (visible_colour). ssim is None for images under 11 pixels on a side. Returns psnr, ssim, flip,
     depth_absrel, depth_rmse, depth_pixels, psnr_answered, wrong_surface_rate, hole_rate, false_hit_rate, false_miss_rate,
     unknown_rate, counts, width, height, ppd and the definitions of all of them.
     """
@@ -289,8 +293,8 @@ def availability(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
 def compare_colour_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
                             ppd: float = _flip.DEFAULT_PPD) -> Tuple[Dict[str, object], np.ndarray]:
     """(metrics, FLIP error map) of a pair that is not two lfprobe renders: the keys of
-    compare_images_with_map, with psnr, ssim and flip on each image's colour (an image with a
-    status plane has its pixels that are not HIT black, as there), psnr_answered where the test
+    compare_images_with_map, with psnr, ssim and flip on each image's colour as rendered,
+    psnr_answered where the test
     has a status, and the depth and confusion figures None (see `availability`)."""
     if ref["rgba"].shape[:2] != test["rgba"].shape[:2]:
         h0, w0 = ref["rgba"].shape[:2]
@@ -298,12 +302,7 @@ def compare_colour_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarr
         raise ValueError(f"images differ in size: reference {w0}×{h0}, test {w1}×{h1}")
     height, width = ref["rgba"].shape[:2]
 
-    def colour(image):
-        if "status" in image:
-            return visible_colour(image)
-        return np.asarray(image["rgba"], dtype=np.float64)[..., :3]
-
-    ref_rgb, test_rgb = colour(ref), colour(test)
+    ref_rgb, test_rgb = visible_colour(ref), visible_colour(test)
     result, error_map = _colour_figures(ref_rgb, test_rgb, ppd)
     result.update({
         "depth_absrel": None,

@@ -31,6 +31,11 @@ struct RenderSettings {
     // (ground_truth.hpp), while depth, normal, status and probe are the pixel centre's; the
     // steps channel sums every ray of the pixel.
     int samples_per_pixel = 1;
+    // Holes at most this many pixels across, regions of pixels whose samples ended UNKNOWN, are
+    // given a colour inferred from the HIT pixels around them (unknown_fill.hpp); their status
+    // stays UNKNOWN. -1: default_hole_fill_pixels of the image (5 % of its larger side); 0: none
+    // (UNKNOWN samples add black, the image before filling existed).
+    int hole_fill_pixels = -1;
 };
 
 // Counts that do not depend on the clock (docs/DESIGN.md §6), and the time it took. hits, misses
@@ -42,6 +47,8 @@ struct RenderStats {
     std::uint64_t unknown = 0;
     std::uint64_t steps = 0;        // texels visited over all rays
     std::uint64_t probes_tried = 0; // probe traces over all rays
+    std::uint64_t holes_filled = 0; // pixels with no HIT sample given a colour by the hole fill
+    std::uint64_t holes_left = 0;   // such pixels in holes wider than the fill reaches
     double seconds = 0.0;           // wall time of the trace (not of loading or writing)
 
     [[nodiscard]] double rays_per_second() const {

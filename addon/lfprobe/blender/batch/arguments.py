@@ -101,6 +101,9 @@ def build_parser() -> argparse.ArgumentParser:
                              "Catmull-Rom, sharper), or averaged over the pixel's footprint (default: the scene's)")
     render.add_argument("--blend", type=int, default=None, metavar="N",
                         help="probes a hit's colour is blended from, 1-8 (default: the scene's)")
+    render.add_argument("--hole-fill-px", dest="hole_fill", type=int, default=None, metavar="N",
+                        help="UNKNOWN holes at most N pixels across coloured from the pixels around them, "
+                             "their status kept (0: off; default: the scene's Fill Holes, 5%% of the width)")
     render.add_argument("--camera-json", metavar="CAM.json", help="also write the camera file used")
     render.set_defaults(run=commands.run_render)
 

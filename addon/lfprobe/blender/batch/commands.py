@@ -151,7 +151,7 @@ def run_render(args) -> int:
     camera_obj = camera_named(scene, args.camera)
     target = probe_view.trace_target(scene, args.grid, camera_obj=camera_obj, depsgraph=evaluated_depsgraph(scene))
     trace = dict(target.trace, spp=target.spp)
-    for option in ("mode", "thickness", "fallback_thickness", "threads", "spp", "filter", "blend"):
+    for option in ("mode", "thickness", "fallback_thickness", "threads", "spp", "filter", "blend", "hole_fill"):
         value = getattr(args, option)
         if value is not None:
             trace[option] = value

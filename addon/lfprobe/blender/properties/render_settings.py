@@ -5,7 +5,7 @@ threads)."""
 from __future__ import annotations
 
 import bpy
-from bpy.props import EnumProperty, FloatProperty, IntProperty, PointerProperty
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, IntProperty, PointerProperty
 
 from ...core import defaults
 from .. import grid as grid_module
@@ -101,5 +101,13 @@ class LFProbeRenderSettings(bpy.types.PropertyGroup):
         min=1,
         max=8,
         default=defaults.trace("blend"),
+        update=_redraw_viewports,
+    )
+    fill_holes: BoolProperty(
+        name="Fill Holes",
+        description="Colour holes of pixels that no probe could answer (UNKNOWN) from the pixels around "
+                    "them, up to 5% of the image's width across; wider unknown regions stay black, and "
+                    "the UNKNOWN pass still marks every such pixel. Off: UNKNOWN pixels are black",
+        default=True,
         update=_redraw_viewports,
     )

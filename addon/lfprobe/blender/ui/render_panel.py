@@ -35,6 +35,7 @@ class RENDER_PT_lfprobe_trace(bpy.types.Panel):
         layout.prop(settings, "samples")
         layout.prop(settings, "radiance_filter")
         layout.prop(settings, "blend")
+        layout.prop(settings, "fill_holes")
         layout.prop(settings, "threads")
         render = context.scene.render
         text, warn = estimates.render_time_text(render.resolution_x, render.resolution_y,

@@ -168,9 +168,10 @@ def _cmd_info(args) -> int:
 
 
 def fidelity_options(args) -> dict:
-    """The image options given on the command line (--spp, --filter, --blend); those left out
-    keep the native renderer's defaults."""
-    return {key: value for key, value in (("spp", args.spp), ("filter", args.filter), ("blend", args.blend))
+    """The image options given on the command line (--spp, --filter, --blend, --hole-fill-px);
+    those left out keep the native renderer's defaults."""
+    return {key: value for key, value in (("spp", args.spp), ("filter", args.filter), ("blend", args.blend),
+                                          ("hole_fill", getattr(args, "hole_fill_px", None)))
             if value is not None}
 
 
@@ -190,6 +191,13 @@ def add_fidelity_arguments(parser) -> None:
     parser.add_argument("--blend", type=int, default=None, metavar="N",
                         help="probes a HIT's colour is blended from, weighted by how finely each sees the "
                              "point (1: the first probe that answers, as the paper; default 4; at most 8)")
+    parser.add_argument("--hole-fill-px", type=int, default=None, metavar="N",
+                        help="holes of pixels whose rays no probe could answer (UNKNOWN), at most N "
+                             "pixels across, are coloured from the HIT pixels around them (a pull-push, "
+                             "as a bake fills a probe's narrow holes); their status stays UNKNOWN, so "
+                             "the hole rate still counts them, and wider regions (a partial scan's "
+                             "unscanned side) stay black. Default: 5%% of the image's larger side "
+                             "(32 at 640 pixels); 0: off, UNKNOWN samples black (the paper's image)")
 
 
 def _cmd_render(args) -> int:
@@ -211,6 +219,9 @@ def _cmd_render(args) -> int:
     print(f"  pixels HIT {100 * stats['hits'] / pixels:.2f}%, MISS {100 * stats['misses'] / pixels:.2f}%, "
           f"UNKNOWN {100 * stats['unknown'] / pixels:.2f}%; {stats['mean_steps']:.1f} texels and "
           f"{stats['mean_probes']:.2f} probes per ray")
+    if stats.get("holes_filled") or stats.get("holes_left"):
+        print(f"  hole fill: {stats['holes_filled']:,} pixels that no probe answered coloured from the pixels "
+              f"around them, {stats['holes_left']:,} left black (in holes wider than the fill reaches)")
     hint = unknown_hint(stats, camera_of(args.camera), args.probes)
     if hint:
         print(f"  {hint}")

@@ -15,8 +15,8 @@ GAP = 4  # pixels of white between the panels of a triplet
 
 
 def preview(image: Dict[str, np.ndarray]) -> np.ndarray:
-    """(h, w, 3) uint8 sRGB of a rendered view; pixels that are not HIT are black (the
-    colour the metrics compare). UNKNOWN pixels are marked magenta so holes show."""
+    """(h, w, 3) uint8 sRGB of a rendered view, its colour as the metrics compare it; pixels
+    whose centre ray is UNKNOWN are marked magenta so holes show (filled or not)."""
     out = srgb8(metrics.visible_colour(image))
     out[np.asarray(image["status"]) == metrics.STATUS_UNKNOWN] = (255, 0, 255)
     return out

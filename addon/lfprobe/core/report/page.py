@@ -194,7 +194,7 @@ def _images_section(page, data: Dict[str, object], img) -> None:
     scene = data["scene"]
     page.section("images", "Images: ground truth | probes | error")
     page.paragraph(f"Setting: {data['reference_setting']}. Left: ground truth; middle: probe render (magenta: "
-                   "UNKNOWN); right: FLIP error per pixel (magma, black 0 … yellow 1).", "note")
+                   "UNKNOWN at the pixel's centre, whether the hole fill coloured it or not); right: FLIP error per pixel (magma, black 0 … yellow 1).", "note")
     for view in [v["name"] for v in scene["views"]]:
         img(f"triplet_probes_{view}.png", f"view '{view}': ground truth | scan-baked probes | FLIP error", None, True)
         img(f"confusion_{view}.png", f"view '{view}': confusion of probe answers against ground truth")

@@ -27,8 +27,11 @@ TRACE_VARIANTS = [
     ("no fallback (the thickness alone)", {**DEFAULT_TRACE[1], "fallback_thickness": 0.0}),
     ("thickness 1 cm (the default before)", {**DEFAULT_TRACE[1], "thickness": 0.01}),
     ("thickness 2 cm (before that)", {**DEFAULT_TRACE[1], "thickness": 0.02}),
-    # The paper's colour: the first probe that answers, its one texel (no filter, no blending).
-    ("first hit, nearest texel (the paper)", {**DEFAULT_TRACE[1], "filter": "nearest", "blend": 1}),
+    # Holes of UNKNOWN pixels left black, as before the render filled them.
+    ("no hole fill", {**DEFAULT_TRACE[1], "hole_fill": 0}),
+    # The paper's colour: the first probe that answers, its one texel (no filter, no blending,
+    # UNKNOWN black).
+    ("first hit, nearest texel (the paper)", {**DEFAULT_TRACE[1], "filter": "nearest", "blend": 1, "hole_fill": 0}),
 ]
 
 # The default trace on probes held in compact storage (ProbeField.load(storage="compact"):

@@ -140,6 +140,7 @@ def _row(setup: ProbeSetup, bake_info: dict, memory_per_probe: float, trace_labe
            "coarse_levels": trace["use_coarse_levels"],
            "coarse_resolution": int(trace.get("coarse_resolution", 0)) or 1,
            "storage": trace.get("storage", "full"),
+           "hole_fill": trace.get("hole_fill", -1),
            "memory_bytes_per_probe": memory_per_probe}
     row.update(bake_info)
     row["setting"] = setting_label(row)

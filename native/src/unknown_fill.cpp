@@ -1,0 +1,242 @@
+#include "lfprobe/unknown_fill.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <limits>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "lfprobe/error.hpp"
+
+namespace lfprobe {
+
+namespace {
+
+constexpr std::int32_t kUnreached = std::numeric_limits<std::int32_t>::max();
+
+// One level of the pull pyramid: the coverage-weighted colour sum and the weight of each cell,
+// the weight capped at 1 (a cell with a full pixel's worth of HIT colour is known).
+struct Level {
+    int width = 0;
+    int height = 0;
+    std::vector<glm::vec3> sum;
+    std::vector<float> weight;
+
+    Level(int w, int h)
+        : width(w), height(h), sum(static_cast<std::size_t>(w) * static_cast<std::size_t>(h)),
+          weight(sum.size(), 0.0f) {}
+    [[nodiscard]] std::size_t at(int x, int y) const {
+        return static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+               static_cast<std::size_t>(x);
+    }
+};
+
+Level pull(const Level& fine) {
+    Level coarse((fine.width + 1) / 2, (fine.height + 1) / 2);
+    for (int y = 0; y < fine.height; ++y) {
+        for (int x = 0; x < fine.width; ++x) {
+            const std::size_t f = fine.at(x, y);
+            const std::size_t c = coarse.at(x / 2, y / 2);
+            coarse.sum[c] += fine.sum[f];
+            coarse.weight[c] += fine.weight[f];
+        }
+    }
+    for (std::size_t c = 0; c < coarse.weight.size(); ++c) {
+        if (coarse.weight[c] > 1.0f) {
+            coarse.sum[c] /= coarse.weight[c];
+            coarse.weight[c] = 1.0f;
+        }
+    }
+    return coarse;
+}
+
+// The fill colour of every cell of `level`: its own mean where its weight is 1, the coarser
+// level's fill (bilinear between the four nearest coarse cells) where it is 0, and the blend
+// of the two in between.
+std::vector<glm::vec3> push(const Level& level, const std::vector<glm::vec3>& coarse_fill,
+                            int coarse_width, int coarse_height) {
+    std::vector<glm::vec3> fill(level.sum.size());
+    const auto coarse_at = [&](int x, int y) {
+        x = std::clamp(x, 0, coarse_width - 1);
+        y = std::clamp(y, 0, coarse_height - 1);
+        return coarse_fill[static_cast<std::size_t>(y) * static_cast<std::size_t>(coarse_width) +
+                           static_cast<std::size_t>(x)];
+    };
+    for (int y = 0; y < level.height; ++y) {
+        for (int x = 0; x < level.width; ++x) {
+            // This cell's centre in the coarse level's cells.
+            const float cx = (static_cast<float>(x) + 0.5f) * 0.5f - 0.5f;
+            const float cy = (static_cast<float>(y) + 0.5f) * 0.5f - 0.5f;
+            const int x0 = static_cast<int>(std::floor(cx));
+            const int y0 = static_cast<int>(std::floor(cy));
+            const float fx = cx - static_cast<float>(x0);
+            const float fy = cy - static_cast<float>(y0);
+            const glm::vec3 up =
+                (1.0f - fy) * ((1.0f - fx) * coarse_at(x0, y0) + fx * coarse_at(x0 + 1, y0)) +
+                fy * ((1.0f - fx) * coarse_at(x0, y0 + 1) + fx * coarse_at(x0 + 1, y0 + 1));
+            const std::size_t i = level.at(x, y);
+            const float w = level.weight[i];
+            fill[i] = w > 0.0f ? level.sum[i] + (1.0f - w) * up : up;
+        }
+    }
+    return fill;
+}
+
+// Chessboard steps from a pixel with a HIT, through hole pixels only (kUnreached where no HIT
+// is reachable), and the 8-connected region of every hole pixel (-1 elsewhere).
+struct HoleRegions {
+    std::vector<std::int32_t> depth;
+    std::vector<std::int32_t> region;
+    std::vector<std::int32_t> region_depth; // the deepest pixel of each region
+};
+
+template <class Visit>
+void for_each_neighbour(int x, int y, int w, int h, Visit&& visit) {
+    for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+            const int ux = x + dx;
+            const int uy = y + dy;
+            if ((dx != 0 || dy != 0) && ux >= 0 && uy >= 0 && ux < w && uy < h) {
+                visit(static_cast<std::size_t>(uy) * static_cast<std::size_t>(w) +
+                      static_cast<std::size_t>(ux));
+            }
+        }
+    }
+}
+
+HoleRegions hole_regions(const std::vector<std::uint8_t>& hole, const std::vector<float>& coverage,
+                         int w, int h) {
+    HoleRegions r;
+    const std::size_t count = hole.size();
+    r.depth.assign(count, kUnreached);
+    r.region.assign(count, -1);
+    std::vector<std::size_t> frontier;
+    for (std::size_t i = 0; i < count; ++i) {
+        if (!hole[i]) {
+            continue;
+        }
+        const int x = static_cast<int>(i % static_cast<std::size_t>(w));
+        const int y = static_cast<int>(i / static_cast<std::size_t>(w));
+        bool beside_hit = false;
+        for_each_neighbour(x, y, w, h, [&](std::size_t u) { beside_hit |= coverage[u] > 0.0f; });
+        if (beside_hit) {
+            r.depth[i] = 1;
+            frontier.push_back(i);
+        }
+    }
+    std::vector<std::size_t> next;
+    for (std::int32_t d = 2; !frontier.empty(); ++d) {
+        next.clear();
+        for (const std::size_t i : frontier) {
+            const int x = static_cast<int>(i % static_cast<std::size_t>(w));
+            const int y = static_cast<int>(i / static_cast<std::size_t>(w));
+            for_each_neighbour(x, y, w, h, [&](std::size_t u) {
+                if (hole[u] && r.depth[u] == kUnreached) {
+                    r.depth[u] = d;
+                    next.push_back(u);
+                }
+            });
+        }
+        frontier.swap(next);
+    }
+    std::vector<std::size_t> stack;
+    for (std::size_t start = 0; start < count; ++start) {
+        if (!hole[start] || r.region[start] >= 0) {
+            continue;
+        }
+        const auto id = static_cast<std::int32_t>(r.region_depth.size());
+        std::int32_t deepest = 0;
+        r.region[start] = id;
+        stack.assign(1, start);
+        while (!stack.empty()) {
+            const std::size_t i = stack.back();
+            stack.pop_back();
+            deepest = std::max(deepest, r.depth[i]);
+            const int x = static_cast<int>(i % static_cast<std::size_t>(w));
+            const int y = static_cast<int>(i / static_cast<std::size_t>(w));
+            for_each_neighbour(x, y, w, h, [&](std::size_t u) {
+                if (hole[u] && r.region[u] < 0) {
+                    r.region[u] = id;
+                    stack.push_back(u);
+                }
+            });
+        }
+        r.region_depth.push_back(deepest);
+    }
+    return r;
+}
+
+} // namespace
+
+int default_hole_fill_pixels(int width, int height) {
+    return std::max(2, static_cast<int>(std::lround(0.05 * std::max(width, height))));
+}
+
+UnknownFillStats fill_unknown_pixels(RenderedImage& image, std::span<const float> unknown_share,
+                                     int max_width) {
+    UnknownFillStats stats;
+    const std::size_t count = image.pixel_count();
+    if (unknown_share.size() != count) {
+        throw InputError("fill_unknown_pixels: " + std::to_string(unknown_share.size()) +
+                         " unknown shares for an image of " + std::to_string(count) + " pixels");
+    }
+    if (max_width < 0) {
+        throw InputError("hole fill: the widest hole to fill must be 0 pixels (off) or more, got " +
+                         std::to_string(max_width));
+    }
+    if (max_width == 0 || count == 0 ||
+        std::none_of(unknown_share.begin(), unknown_share.end(),
+                     [](float u) { return u > 0.0f; })) {
+        return stats;
+    }
+    const int w = image.width;
+    const int h = image.height;
+    std::vector<float> coverage(count);
+    std::vector<std::uint8_t> hole(count, 0);
+    Level base(w, h);
+    for (std::size_t i = 0; i < count; ++i) {
+        coverage[i] = image.rgba[4 * i + 3];
+        // The colour is premultiplied by coverage: the sum a pyramid of coverage weights needs.
+        base.sum[i] = glm::vec3(image.rgba[4 * i], image.rgba[4 * i + 1], image.rgba[4 * i + 2]);
+        base.weight[i] = std::min(coverage[i], 1.0f);
+        hole[i] = coverage[i] <= 0.0f && unknown_share[i] > 0.0f ? 1 : 0;
+    }
+    const HoleRegions regions = hole_regions(hole, coverage, w, h);
+    const std::int32_t reach = (max_width + 1) / 2;
+
+    std::vector<Level> levels;
+    levels.push_back(std::move(base));
+    while (levels.back().width > 1 || levels.back().height > 1) {
+        levels.push_back(pull(levels.back()));
+    }
+    const Level& top = levels.back();
+    std::vector<glm::vec3> fill(1, top.weight[0] > 0.0f ? top.sum[0] / top.weight[0]
+                                                        : glm::vec3(0.0f));
+    for (std::size_t l = levels.size() - 1; l-- > 0;) {
+        fill = push(levels[l], fill, levels[l + 1].width, levels[l + 1].height);
+    }
+
+    for (std::size_t i = 0; i < count; ++i) {
+        const float u = unknown_share[i];
+        if (u <= 0.0f) {
+            continue;
+        }
+        if (hole[i]) {
+            const std::int32_t region = regions.region[static_cast<std::size_t>(i)];
+            if (regions.region_depth[static_cast<std::size_t>(region)] > reach) {
+                ++stats.pixels_left;
+                continue;
+            }
+            ++stats.pixels_filled;
+        }
+        for (int c = 0; c < 3; ++c) {
+            image.rgba[4 * i + static_cast<std::size_t>(c)] += u * fill[i][c];
+        }
+        image.rgba[4 * i + 3] = std::min(1.0f, coverage[i] + u);
+    }
+    return stats;
+}
+
+} // namespace lfprobe
