@@ -224,7 +224,7 @@ UnknownFillStats fill_unknown_pixels(RenderedImage& image, std::span<const float
             continue;
         }
         if (hole[i]) {
-            const std::int32_t region = regions.region[static_cast<std::size_t>(i)];
+            const std::int32_t region = regions.region[i];
             if (regions.region_depth[static_cast<std::size_t>(region)] > reach) {
                 ++stats.pixels_left;
                 continue;

@@ -14,7 +14,9 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 LAB_SCENE = os.path.join(ROOT, "blend", "lab_room", "lab_room.scene.json")
 
 
-def test_a_partial_scan_renders_the_same_image_asking_fewer_probes(native, tmp_path):
+def _partial_scan_probes(native, tmp_path):
+    """(the scene, the probe folder): the lab room scanned from its first station over a 90°
+    window of azimuth at 1°, baked into the scene's grid at 128²."""
     with open(LAB_SCENE, encoding="utf-8") as f:
         scene = json.load(f)
     mesh = os.path.join(os.path.dirname(LAB_SCENE), scene["mesh"])
@@ -27,6 +29,11 @@ def test_a_partial_scan_renders_the_same_image_asking_fewer_probes(native, tmp_p
     folder = str(tmp_path / "probes")
     native.bake_probe_set(cloud, folder, resolution=128, grid_min=scene["grid"]["min"],
                           grid_max=scene["grid"]["max"], counts=scene["grid"]["counts"])
+    return scene, folder
+
+
+def test_a_partial_scan_renders_the_same_image_asking_fewer_probes(native, tmp_path):
+    scene, folder = _partial_scan_probes(native, tmp_path)
     with open(os.path.join(folder, "manifest.json"), encoding="utf-8") as f:
         assert json.load(f)["known_space"] == "known_space.bin"
     assert os.path.isfile(os.path.join(folder, "known_space.bin"))
@@ -54,18 +61,7 @@ def test_the_hole_fill_colours_narrow_holes_keeps_every_status_and_leaves_the_un
     from conftest import run_cli
     from lfprobe.core.image_files import read_any_image
 
-    with open(LAB_SCENE, encoding="utf-8") as f:
-        scene = json.load(f)
-    mesh = os.path.join(os.path.dirname(LAB_SCENE), scene["mesh"])
-    xyz = str(tmp_path / "station.xyz")
-    native.start_simulate_scan(mesh, xyz, [float(v) for v in scene["scanners"][0]], step_deg=1.0,
-                               noise_mm=scene["scan"]["noise_mm"],
-                               vertical_fov=scene["scan"]["vertical_fov"], horizontal_fov=90.0,
-                               horizontal_start=45.0).run()
-    folder = str(tmp_path / "probes")
-    cloud = native.load_scans([xyz], cache_dir="")
-    native.bake_probe_set(cloud, folder, resolution=128, grid_min=scene["grid"]["min"],
-                          grid_max=scene["grid"]["max"], counts=scene["grid"]["counts"])
+    scene, folder = _partial_scan_probes(native, tmp_path)
     filled_any = left_any = 0
     for view in scene["views"]:
         camera = str(tmp_path / f"{view['name']}.json")
