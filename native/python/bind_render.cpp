@@ -61,6 +61,7 @@ struct Fidelity {
     std::string filter = radiance_filter_name(FieldTraceSettings{}.filter);
     int blend = FieldTraceSettings{}.blend;
     int hole_fill = RenderSettings{}.hole_fill_pixels;
+    bool prefer_measured = FieldTraceSettings{}.prefer_measured;
 };
 
 RenderSettings render_settings(const std::string& mode, double thickness, bool use_coarse_levels,
@@ -80,6 +81,7 @@ RenderSettings render_settings(const std::string& mode, double thickness, bool u
     settings.trace.filter = radiance_filter_from_name(fidelity.filter);
     settings.trace.blend = fidelity.blend;
     settings.hole_fill_pixels = fidelity.hole_fill;
+    settings.trace.prefer_measured = fidelity.prefer_measured;
     return settings;
 }
 
@@ -182,11 +184,12 @@ void bind_render(py::module_& m) {
                const std::string& mode, int threads, double thickness, bool use_coarse_levels,
                int tile_size, int spp, const std::string& filter, int blend,
                double fallback_thickness, int max_probes_per_ray,
-               bool stop_where_no_probe_can_answer, int hole_fill) {
+               bool stop_where_no_probe_can_answer, int hole_fill, bool prefer_measured) {
                 const Camera cam = camera_from(camera);
                 const RenderSettings settings = render_settings(
-                    mode, thickness, use_coarse_levels, tile_size, {spp, filter, blend, hole_fill},
-                    fallback_thickness, max_probes_per_ray, stop_where_no_probe_can_answer);
+                    mode, thickness, use_coarse_levels, tile_size,
+                    {spp, filter, blend, hole_fill, prefer_measured}, fallback_thickness,
+                    max_probes_per_ray, stop_where_no_probe_can_answer);
                 using Result = std::pair<RenderedImage, RenderStats>;
                 return std::make_unique<Job>(
                     std::function<Result(Progress&)>([=](Progress& progress) {
@@ -210,6 +213,7 @@ void bind_render(py::module_& m) {
             py::arg("max_probes_per_ray") = FieldTraceSettings{}.max_probes_per_ray,
             py::arg("stop_where_no_probe_can_answer") = true,
             py::arg("hole_fill") = Fidelity{}.hole_fill,
+            py::arg("prefer_measured") = Fidelity{}.prefer_measured,
             "Start tracing a view in the background (the Blender engine's F12): a Job with "
             "progress in pixels, cancel(), and result() = (image dict, stats dict) as render() "
             "returns.")
@@ -219,11 +223,12 @@ void bind_render(py::module_& m) {
                const std::string& output, const std::string& mode, int threads, double thickness,
                bool use_coarse_levels, int tile_size, int spp, const std::string& filter, int blend,
                double fallback_thickness, int max_probes_per_ray,
-               bool stop_where_no_probe_can_answer, int hole_fill) {
+               bool stop_where_no_probe_can_answer, int hole_fill, bool prefer_measured) {
                 const Camera cam = camera_from(camera);
                 const RenderSettings settings = render_settings(
-                    mode, thickness, use_coarse_levels, tile_size, {spp, filter, blend, hole_fill},
-                    fallback_thickness, max_probes_per_ray, stop_where_no_probe_can_answer);
+                    mode, thickness, use_coarse_levels, tile_size,
+                    {spp, filter, blend, hole_fill, prefer_measured}, fallback_thickness,
+                    max_probes_per_ray, stop_where_no_probe_can_answer);
                 RenderStats stats;
                 RenderedImage image;
                 {
@@ -244,6 +249,7 @@ void bind_render(py::module_& m) {
             py::arg("max_probes_per_ray") = FieldTraceSettings{}.max_probes_per_ray,
             py::arg("stop_where_no_probe_can_answer") = true,
             py::arg("hole_fill") = Fidelity{}.hole_fill,
+            py::arg("prefer_measured") = Fidelity{}.prefer_measured,
             "Trace a view (camera: a JSON path or text); returns (image dict, stats dict) and "
             "writes the EXR when output is given. threads=0 uses every core. spp: samples per "
             "pixel (1 or a square; colour and coverage averaged, the rest from the pixel "
@@ -252,18 +258,22 @@ void bind_render(py::module_& m) {
             "(1: the answering probe alone); max_probes_per_ray: at most that many probes asked "
             "about a ray (0: no bound; a bound is not exact); hole_fill: holes of UNKNOWN pixels "
             "at most that many pixels across are coloured from the HIT pixels around them, "
-            "their status kept (-1: 5 % of the image's larger side; 0: off).");
+            "their status kept (-1: 5 % of the image's larger side; 0: off); prefer_measured: "
+            "a HIT on a hole-filled texel waits for the other probes' measured answers (False: "
+            "the first HIT wins, as the paper).");
 
     m.def(
         "start_render",
         [](const std::string& folder, const std::string& camera, const std::string& output,
            const std::string& mode, int threads, double thickness, bool use_coarse_levels,
            const py::object& storage, double distance_step, int spp, const std::string& filter,
-           int blend, double fallback_thickness, int max_probes_per_ray, int hole_fill) {
+           int blend, double fallback_thickness, int max_probes_per_ray, int hole_fill,
+           bool prefer_measured) {
             const Camera cam = camera_from(camera);
-            const RenderSettings settings = render_settings(mode, thickness, use_coarse_levels, 32,
-                                                            {spp, filter, blend, hole_fill},
-                                                            fallback_thickness, max_probes_per_ray);
+            const RenderSettings settings =
+                render_settings(mode, thickness, use_coarse_levels, 32,
+                                {spp, filter, blend, hole_fill, prefer_measured},
+                                fallback_thickness, max_probes_per_ray);
             const std::optional<ProbeStorage> chosen = storage_from(storage, distance_step);
             return std::make_unique<Job>(
                 std::function<RenderStats(Progress&)>([=](Progress& progress) {
@@ -283,6 +293,7 @@ void bind_render(py::module_& m) {
         py::arg("fallback_thickness") = TraceSettings{}.fallback_thickness,
         py::arg("max_probes_per_ray") = FieldTraceSettings{}.max_probes_per_ray,
         py::arg("hole_fill") = Fidelity{}.hole_fill,
+        py::arg("prefer_measured") = Fidelity{}.prefer_measured,
         "Start rendering the probe set in `folder` from `camera` (JSON path or text) into the EXR "
         "`output`; the Job's result is the stats dict. storage as for ProbeField.load.");
 

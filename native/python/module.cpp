@@ -217,6 +217,7 @@ py::dict defaults_dict() {
     trace["spp"] = render.samples_per_pixel;
     trace["tile_size"] = render.tile_size;
     trace["hole_fill"] = render.hole_fill_pixels;
+    trace["prefer_measured"] = render.trace.prefer_measured;
     py::dict baking;
     baking["resolution"] = bake.resolution;
     baking["splat_scale"] = as_written(bake.splat_scale);

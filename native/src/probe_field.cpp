@@ -92,8 +92,23 @@ struct FieldQuery {
             keep_fallback(index, r);
             return false;
         }
+        if (prefer_measured && r.status == TraceStatus::Hit && field.is_inferred(index, r.texel)) {
+            keep_inferred(index, r);
+            return false; // asked on from the same start: another probe may have measured it
+        }
         answer(index, r, r.status, r.t, r.free_until, r.texel);
         return true;
+    }
+
+    // A HIT on a hole-filled texel, kept while other probes are asked: the nearest along the
+    // ray.
+    void keep_inferred(std::size_t index, const ProbeTraceResult& r) {
+        if (inferred_kept && inferred.t <= r.t) {
+            return;
+        }
+        inferred = r;
+        inferred_probe = index;
+        inferred_kept = true;
     }
 
     // Probe `index`'s answer, its colour and normal from `r`, as the field's.
@@ -123,8 +138,14 @@ struct FieldQuery {
         fallback_probe = index;
     }
 
-    // No probe answered: a HIT on the kept fallback, else UNKNOWN.
+    // No probe answered: a HIT on the kept guess (an inferred texel), else on the kept
+    // fallback, else UNKNOWN.
     void finish_unanswered() {
+        if (inferred_kept) {
+            answer(inferred_probe, inferred, TraceStatus::Hit, inferred.t, inferred.free_until,
+                   inferred.texel);
+            return;
+        }
         result.status = TraceStatus::Unknown;
         if (!fallback.has_fallback) {
             return;
@@ -192,6 +213,10 @@ struct FieldQuery {
     bool start_in_surface = false;
     // The last t along the ray in a surface voxel (-inf: none); NaN until first needed.
     double last_surface_t = std::numeric_limits<double>::quiet_NaN();
+    bool prefer_measured = true; // FieldTraceSettings::prefer_measured
+    ProbeTraceResult inferred{}; // keep_inferred's HIT, when inferred_kept
+    std::size_t inferred_probe = 0;
+    bool inferred_kept = false;
 };
 
 // Candidate probes ordered by squared distance to `point`, ties by index (deterministic).
@@ -342,6 +367,11 @@ const KnownSpaceMask* ProbeField::known_space_mask(const TraceSettings& settings
 
 bool ProbeField::uses_known_space() const {
     return known_space_ != nullptr && !known_space_->has_empty_texels();
+}
+
+bool ProbeField::is_inferred(std::size_t i, oct::Texel texel) const {
+    const ProbeMap& map = probe(i);
+    return map.state(oct::texel_index(texel, map.resolution)) == TexelState::Inferred;
 }
 
 bool ProbeField::saw_free(std::size_t i, const glm::dvec3& point) const {
@@ -767,6 +797,7 @@ FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
                                            const FieldTraceSettings& settings) const {
     FieldQuery query{*this, ray, settings.probe, {}, {}, 0, settings.max_probes_per_ray};
     query.result.free_until = ray.t_min;
+    query.prefer_measured = settings.prefer_measured;
     if (settings.stop_where_no_probe_can_answer) {
         query.known = known_space_mask(settings.probe);
     }
@@ -812,6 +843,7 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
     }
     FieldQuery query{*this, ray, settings.probe, {}, {}, 0, settings.max_probes_per_ray};
     query.result.free_until = ray.t_min;
+    query.prefer_measured = settings.prefer_measured;
     if (settings.stop_where_no_probe_can_answer) {
         query.known = known_space_mask(settings.probe);
     }

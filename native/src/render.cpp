@@ -50,6 +50,7 @@ nlohmann::json render_settings_json(const RenderSettings& settings) {
         {"eye_at_probe_distance", p.eye_at_probe_distance},
         {"filter", radiance_filter_name(settings.trace.filter)},
         {"blend", settings.trace.blend},
+        {"prefer_measured", settings.trace.prefer_measured},
         {"samples_per_pixel", settings.samples_per_pixel},
         {"hole_fill_pixels", settings.hole_fill_pixels},
         {"tile_size", settings.tile_size},

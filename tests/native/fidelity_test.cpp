@@ -1,7 +1,8 @@
 // The image's fidelity (docs/DESIGN.md §5): samples per pixel, the bilinear radiance
 // filter and the blending of probes. Hard cases by name: a surface of one colour, a
 // silhouette in front of a wall, the order of the probes, the thread count, and the paper's
-// one-sample first-hit image that spp 1, nearest, blend 1 must reproduce bit for bit.
+// one-sample first-hit image that spp 1, nearest, blend 1, no hole fill and the first HIT
+// (guess or not) must reproduce bit for bit.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -335,10 +336,14 @@ TEST(Fidelity, OneSampleNearestFirstHitIsThePapersImageBitForBit) {
                               Camera::look_at(grid.positions[4], {1.6, 0.9, 0.7}, 32, 24, 24.0)};
     for (const Camera& camera : cameras) {
         for (const FieldMode mode : {FieldMode::Grid, FieldMode::Nearest}) {
-            const RenderedImage image =
-                render_probe_view(field, camera, fidelity(1, RadianceFilter::Nearest, 1, mode));
+            // The paper's image: no hole fill either (an UNKNOWN pixel stays black).
+            RenderSettings paper = fidelity(1, RadianceFilter::Nearest, 1, mode);
+            paper.hole_fill_pixels = 0;
+            paper.trace.prefer_measured = false;
+            const RenderedImage image = render_probe_view(field, camera, paper);
             FieldTraceSettings visibility;
             visibility.mode = mode;
+            visibility.prefer_measured = false;
             for (int y = 0; y < camera.height; ++y) {
                 for (int x = 0; x < camera.width; ++x) {
                     const std::size_t i = image.index(x, y);
@@ -348,6 +353,9 @@ TEST(Fidelity, OneSampleNearestFirstHitIsThePapersImageBitForBit) {
                                                    : field.trace_nearest(ray, visibility);
                     ASSERT_EQ(image.status[i], static_cast<std::uint8_t>(r.status));
                     if (r.status != TraceStatus::Hit) {
+                        for (int c = 0; c < 4; ++c) {
+                            EXPECT_EQ(image.rgba[4 * i + static_cast<std::size_t>(c)], 0.0f);
+                        }
                         continue;
                     }
                     EXPECT_EQ(image.rgba[4 * i], r.radiance.x);

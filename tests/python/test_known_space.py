@@ -68,12 +68,15 @@ def test_the_hole_fill_colours_narrow_holes_keeps_every_status_and_leaves_the_un
         with open(camera, "w", encoding="utf-8") as f:
             json.dump(camera_dict(view["position"], view["look_at"], (160, 100), lens=view["lens"]), f)
         images = {}
-        for label, extra in (("off", ["--hole-fill-px", "0"]), ("on", [])):
+        for label, extra in (("off", ["--hole-fill-px", "0"]), ("on", []), ("first", ["--keep-inferred-hits"])):
             out = str(tmp_path / f"{view['name']}_{label}.exr")
             result = run_cli("render", "--probes", folder, "--camera", camera, "--out", out, "--spp", "4",
                              "--json", *extra, check=True)
             images[label] = (read_any_image(out), json.loads(result.stdout))
         (off, stats_off), (on, stats_on) = images["off"], images["on"]
+        # The first-hit rule changes which probe answers a guessed texel, never whether a pixel
+        # is UNKNOWN here: a guess answers where no probe measured the point either way.
+        assert np.array_equal(images["first"][0]["status"] == 2, on["status"] == 2), view["name"]
         assert np.array_equal(off["status"], on["status"]) and stats_off["holes_filled"] == 0
         whole = off["rgba"][..., 3] == 1.0
         assert np.array_equal(off["rgba"][whole], on["rgba"][whole]), view["name"]

@@ -1,7 +1,7 @@
 """The defaults of the native core's settings, as the native module states them
 (``_native.DEFAULTS``): the command line, the report and the add-on take them from here instead
 of writing their own copies. ``trace(name)``: mode, thickness, fallback_thickness, use_coarse_levels, max_probes, max_probes_per_ray,
-filter, blend, spp, tile_size, hole_fill; ``bake(name)``: resolution, splat_scale, hole_fill_texels,
+filter, blend, spp, tile_size, hole_fill, prefer_measured; ``bake(name)``: resolution, splat_scale, hole_fill_texels,
 max_splat_radius_texels, normal_neighbours, lod_texels, splat_edge_margin, splat_core_scale,
 supersample;
 ``storage(name)``: distance_step."""

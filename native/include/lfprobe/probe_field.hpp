@@ -72,6 +72,14 @@ struct FieldTraceSettings {
     // with a known space, as every bake writes (false: ask on; the same answer, only slower;
     // for tests and measurements).
     bool stop_where_no_probe_can_answer = true;
+    // A HIT on a hole-filled texel (TexelState::Inferred: the bake's guess where its probe saw
+    // nothing) is kept aside while the other probes are asked: a HIT or MISS one of them
+    // measured wins, and the guess answers only where none does (before any fallback meeting).
+    // An eye at a probe keeps its own lookup, guesses included: from the centre whose hole
+    // fill made the guess it scored better than the other probes' answers (docs/DESIGN.md §4).
+    // false: the first probe that answers HIT wins, guess or not, as the paper's first-hit rule
+    // (and the renderer before 2026-11-27).
+    bool prefer_measured = true;
 };
 
 struct FieldTraceResult {
@@ -147,6 +155,9 @@ public:
     // Whether probe i may have seen `point` (local frame) free: false only where its known
     // space says it did not (known_space.hpp's SeenVoxels); never reads the probe.
     [[nodiscard]] bool saw_free(std::size_t i, const glm::dvec3& point) const;
+    // Whether probe i's texel holds a hole-filled surface (TexelState::Inferred); false in
+    // compact storage, which keeps no confidence. Reads the probe (it is in memory once traced).
+    [[nodiscard]] bool is_inferred(std::size_t i, oct::Texel texel) const;
     // Whether probe i's trace would answer `ray` (local frame) UNKNOWN where it starts, at its
     // first texel, judged from the directions the known space says it knows (SeenDirections);
     // never reads the probe. False where the known space cannot tell.

@@ -170,9 +170,12 @@ def _cmd_info(args) -> int:
 def fidelity_options(args) -> dict:
     """The image options given on the command line (--spp, --filter, --blend, --hole-fill-px);
     those left out keep the native renderer's defaults."""
-    return {key: value for key, value in (("spp", args.spp), ("filter", args.filter), ("blend", args.blend),
-                                          ("hole_fill", getattr(args, "hole_fill_px", None)))
-            if value is not None}
+    options = {key: value for key, value in (("spp", args.spp), ("filter", args.filter), ("blend", args.blend),
+                                             ("hole_fill", getattr(args, "hole_fill_px", None)))
+               if value is not None}
+    if getattr(args, "keep_inferred_hits", False):
+        options["prefer_measured"] = False
+    return options
 
 
 def add_fidelity_arguments(parser) -> None:
@@ -198,6 +201,10 @@ def add_fidelity_arguments(parser) -> None:
                              "the hole rate still counts them, and wider regions (a partial scan's "
                              "unscanned side) stay black. Default: 5%% of the image's larger side "
                              "(32 at 640 pixels); 0: off, UNKNOWN samples black (the paper's image)")
+    parser.add_argument("--keep-inferred-hits", action="store_true",
+                        help="answer a HIT on a hole-filled (inferred) texel at once, as the paper's "
+                             "first-hit rule does; by default such a HIT waits while the other probes "
+                             "are asked, and one that measured the point wins")
 
 
 def _cmd_render(args) -> int:

@@ -30,8 +30,9 @@ TRACE_VARIANTS = [
     # Holes of UNKNOWN pixels left black, as before the render filled them.
     ("no hole fill", {**DEFAULT_TRACE[1], "hole_fill": 0}),
     # The paper's colour: the first probe that answers, its one texel (no filter, no blending,
-    # UNKNOWN black).
-    ("first hit, nearest texel (the paper)", {**DEFAULT_TRACE[1], "filter": "nearest", "blend": 1, "hole_fill": 0}),
+    # UNKNOWN black, a hole-filled texel's HIT taken as any other).
+    ("first hit, nearest texel (the paper)", {**DEFAULT_TRACE[1], "filter": "nearest", "blend": 1, "hole_fill": 0,
+                                              "prefer_measured": False}),
 ]
 
 # The default trace on probes held in compact storage (ProbeField.load(storage="compact"):
