@@ -13,6 +13,7 @@
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
+#include "grid_neighbours.hpp"
 #include "lfprobe/probe_bake.hpp"
 
 namespace lfprobe {
@@ -73,23 +74,6 @@ struct PullLevel {
     }
 };
 
-// Calls visit(u) for each of texel t's 8 neighbours inside the map, in a fixed order.
-template <class Visit>
-void for_each_neighbour(std::uint32_t t, int n, Visit&& visit) {
-    const int x = static_cast<int>(t % static_cast<std::uint32_t>(n));
-    const int y = static_cast<int>(t / static_cast<std::uint32_t>(n));
-    for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-            const int ux = x + dx;
-            const int uy = y + dy;
-            if ((dx == 0 && dy == 0) || ux < 0 || uy < 0 || ux >= n || uy >= n) {
-                continue;
-            }
-            visit(static_cast<std::uint32_t>(uy * n + ux));
-        }
-    }
-}
-
 // Connected (8-neighbour) components of unknown texels that are at most `max_width` texels
 // across: no texel of one lies more than ceil(max_width / 2) steps (8-neighbour) from the
 // measured surface around it. Width, not the bounding box: a long thin crack (the strip under a
@@ -117,7 +101,7 @@ std::vector<std::vector<std::uint32_t>> small_holes(const ProbeMap& map, int max
             const std::uint32_t t = stack.back();
             stack.pop_back();
             component.push_back(t);
-            for_each_neighbour(t, n, [&](std::uint32_t u) {
+            for_each_neighbour(t, n, n, [&](std::uint32_t u) {
                 if (!seen[u] && map.state(u) == TexelState::Unknown) {
                     seen[u] = 1;
                     stack.push_back(u);
@@ -128,7 +112,7 @@ std::vector<std::vector<std::uint32_t>> small_holes(const ProbeMap& map, int max
         frontier.clear();
         for (const std::uint32_t t : component) {
             bool on_border = false;
-            for_each_neighbour(t, n, [&](std::uint32_t u) {
+            for_each_neighbour(t, n, n, [&](std::uint32_t u) {
                 on_border = on_border || map.state(u) == TexelState::Surface;
             });
             depth[t] = on_border ? 1 : 0;
@@ -140,7 +124,7 @@ std::vector<std::vector<std::uint32_t>> small_holes(const ProbeMap& map, int max
         for (int d = 2; d <= max_depth && !frontier.empty(); ++d) {
             next.clear();
             for (const std::uint32_t t : frontier) {
-                for_each_neighbour(t, n, [&](std::uint32_t u) {
+                for_each_neighbour(t, n, n, [&](std::uint32_t u) {
                     if (depth[u] == 0 && map.state(u) == TexelState::Unknown) {
                         depth[u] = d;
                         next.push_back(u);
@@ -171,7 +155,7 @@ float disocclusion_split(const ProbeMap& map, const std::vector<std::uint32_t>& 
     const int n = map.resolution;
     std::vector<std::uint32_t> border;
     for (const std::uint32_t t : hole) {
-        for_each_neighbour(t, n, [&](std::uint32_t u) {
+        for_each_neighbour(t, n, n, [&](std::uint32_t u) {
             if (!in_border[u] && map.state(u) == TexelState::Surface) {
                 in_border[u] = 1;
                 border.push_back(u);
@@ -223,7 +207,7 @@ void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole,
     std::vector<std::uint32_t> frontier;
     for (const std::uint32_t t : hole) {
         bool next_to_known = false;
-        for_each_neighbour(t, n, [&](std::uint32_t u) { next_to_known |= known(u, 1); });
+        for_each_neighbour(t, n, n, [&](std::uint32_t u) { next_to_known |= known(u, 1); });
         if (next_to_known) {
             frontier.push_back(t);
         }
@@ -238,7 +222,7 @@ void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole,
                                      n);
             Fill f{t, 0.0f, glm::vec3(0.0f), glm::vec3(0.0f)};
             int from = 0;
-            for_each_neighbour(t, n, [&](std::uint32_t u) {
+            for_each_neighbour(t, n, n, [&](std::uint32_t u) {
                 if (!known(u, layer)) {
                     return;
                 }
@@ -275,7 +259,7 @@ void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole,
             layer_of[f.t] = layer;
         }
         for (const Fill& f : fills) {
-            for_each_neighbour(f.t, n, [&](std::uint32_t u) {
+            for_each_neighbour(f.t, n, n, [&](std::uint32_t u) {
                 if (layer_of[u] == kUnfilled) {
                     layer_of[u] = kQueued;
                     next.push_back(u);
@@ -472,7 +456,7 @@ std::size_t open_gaps_in_nearer_surfaces(ProbeMap& map, int reach) {
     for (std::size_t q = 0; q < queue.size(); ++q) {
         const std::uint32_t t = queue[q];
         const float depth = measured[t];
-        for_each_neighbour(t, n, [&](std::uint32_t u) {
+        for_each_neighbour(t, n, n, [&](std::uint32_t u) {
             if (seen_through[u] != 0 ||
                 !(std::abs(measured[u] - depth) <= kSieveRimSpread * depth)) {
                 return;

@@ -89,26 +89,17 @@ struct FieldQuery {
         ++result.probes_tried;
         if (r.status == TraceStatus::Unknown) {
             result.free_until = std::max(result.free_until, r.free_until);
-            keep_fallback(index, r);
+            if (r.has_fallback) {
+                keep(KeptHit::kFallback, index, r, r.t_fallback, r.fallback_texel);
+            }
             return false;
         }
         if (prefer_measured && r.status == TraceStatus::Hit && field.is_inferred(index, r.texel)) {
-            keep_inferred(index, r);
+            keep(KeptHit::kGuess, index, r, r.t, r.texel);
             return false; // asked on from the same start: another probe may have measured it
         }
         answer(index, r, r.status, r.t, r.free_until, r.texel);
         return true;
-    }
-
-    // A HIT on a hole-filled texel, kept while other probes are asked: the nearest along the
-    // ray.
-    void keep_inferred(std::size_t index, const ProbeTraceResult& r) {
-        if (inferred_kept && inferred.t <= r.t) {
-            return;
-        }
-        inferred = r;
-        inferred_probe = index;
-        inferred_kept = true;
     }
 
     // Probe `index`'s answer, its colour and normal from `r`, as the field's.
@@ -123,35 +114,26 @@ struct FieldQuery {
         result.texel = texel;
     }
 
-    // A probe's fallback meeting (ProbeTraceResult::has_fallback): the nearest along the ray
-    // is kept. A later probe that proves the ray free past it does not drop it: that probe
-    // judged with the 1 cm thickness, and on a one-station scan its view behind the edge is
-    // the hole fill's guess (the pump room's silhouettes stayed UNKNOWN when it did).
-    void keep_fallback(std::size_t index, const ProbeTraceResult& r) {
-        if (!r.has_fallback) {
+    // A HIT kept while other probes are asked, answered only if none of them does: a HIT on
+    // a hole-filled texel (FieldTraceSettings::prefer_measured) outranks a probe's fallback
+    // meeting (ProbeTraceResult::has_fallback), and of two of a kind the nearer along the ray
+    // is kept. A later probe that proves the ray free past a fallback does not drop it: that
+    // probe judged with the 1 cm thickness, and on a one-station scan its view behind the edge
+    // is the hole fill's guess (the pump room's silhouettes stayed UNKNOWN when it did).
+    void keep(int rank, std::size_t index, const ProbeTraceResult& r, double t, oct::Texel texel) {
+        if (kept.rank < rank || (kept.rank == rank && kept.t <= t)) {
             return;
         }
-        if (fallback.has_fallback && fallback.t_fallback <= r.t_fallback) {
-            return;
-        }
-        fallback = r;
-        fallback_probe = index;
+        kept = {r, index, t, texel, rank};
     }
 
-    // No probe answered: a HIT on the kept guess (an inferred texel), else on the kept
-    // fallback, else UNKNOWN.
+    // No probe answered: a HIT on the kept one, else UNKNOWN.
     void finish_unanswered() {
-        if (inferred_kept) {
-            answer(inferred_probe, inferred, TraceStatus::Hit, inferred.t, inferred.free_until,
-                   inferred.texel);
+        if (kept.rank == KeptHit::kNone) {
+            result.status = TraceStatus::Unknown;
             return;
         }
-        result.status = TraceStatus::Unknown;
-        if (!fallback.has_fallback) {
-            return;
-        }
-        answer(fallback_probe, fallback, TraceStatus::Hit, fallback.t_fallback, fallback.t_fallback,
-               fallback.fallback_texel);
+        answer(kept.probe, kept.result, TraceStatus::Hit, kept.t, kept.t, kept.texel);
     }
 
     // No probe is asked any more: FieldTraceSettings::max_probes_per_ray were asked, or the ray
@@ -203,8 +185,16 @@ struct FieldQuery {
         }
     }
 
-    ProbeTraceResult fallback;
-    std::size_t fallback_probe = 0;
+    struct KeptHit {
+        static constexpr int kGuess = 0; // ranks: the lower is kept
+        static constexpr int kFallback = 1;
+        static constexpr int kNone = 2;
+        ProbeTraceResult result;
+        std::size_t probe = 0;
+        double t = std::numeric_limits<double>::infinity();
+        oct::Texel texel{-1, -1};
+        int rank = kNone;
+    } kept;
     int max_probes = 0;
     const KnownSpaceMask* known = nullptr;
     double checked_from = std::numeric_limits<double>::quiet_NaN();
@@ -214,9 +204,6 @@ struct FieldQuery {
     // The last t along the ray in a surface voxel (-inf: none); NaN until first needed.
     double last_surface_t = std::numeric_limits<double>::quiet_NaN();
     bool prefer_measured = true; // FieldTraceSettings::prefer_measured
-    ProbeTraceResult inferred{}; // keep_inferred's HIT, when inferred_kept
-    std::size_t inferred_probe = 0;
-    bool inferred_kept = false;
 };
 
 // Candidate probes ordered by squared distance to `point`, ties by index (deterministic).
@@ -795,7 +782,7 @@ void ProbeField::see_edge_of_a_miss_as_the_centre_does(const Ray& ray,
 
 FieldTraceResult ProbeField::trace_nearest(const Ray& ray,
                                            const FieldTraceSettings& settings) const {
-    FieldQuery query{*this, ray, settings.probe, {}, {}, 0, settings.max_probes_per_ray};
+    FieldQuery query{*this, ray, settings.probe, {}, {}, settings.max_probes_per_ray};
     query.result.free_until = ray.t_min;
     query.prefer_measured = settings.prefer_measured;
     if (settings.stop_where_no_probe_can_answer) {
@@ -841,7 +828,7 @@ FieldTraceResult ProbeField::trace_grid(const Ray& ray, const FieldTraceSettings
     if (!walk.meets_grid()) {
         return trace_nearest(ray, settings); // the ray never meets the grid's box
     }
-    FieldQuery query{*this, ray, settings.probe, {}, {}, 0, settings.max_probes_per_ray};
+    FieldQuery query{*this, ray, settings.probe, {}, {}, settings.max_probes_per_ray};
     query.result.free_until = ray.t_min;
     query.prefer_measured = settings.prefer_measured;
     if (settings.stop_where_no_probe_can_answer) {

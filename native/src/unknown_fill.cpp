@@ -8,6 +8,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "grid_neighbours.hpp"
 #include "lfprobe/error.hpp"
 
 namespace lfprobe {
@@ -92,20 +93,6 @@ struct HoleRegions {
     std::vector<std::int32_t> region_depth; // the deepest pixel of each region
 };
 
-template <class Visit>
-void for_each_neighbour(int x, int y, int w, int h, Visit&& visit) {
-    for (int dy = -1; dy <= 1; ++dy) {
-        for (int dx = -1; dx <= 1; ++dx) {
-            const int ux = x + dx;
-            const int uy = y + dy;
-            if ((dx != 0 || dy != 0) && ux >= 0 && uy >= 0 && ux < w && uy < h) {
-                visit(static_cast<std::size_t>(uy) * static_cast<std::size_t>(w) +
-                      static_cast<std::size_t>(ux));
-            }
-        }
-    }
-}
-
 HoleRegions hole_regions(const std::vector<std::uint8_t>& hole, const std::vector<float>& coverage,
                          int w, int h) {
     HoleRegions r;
@@ -117,10 +104,8 @@ HoleRegions hole_regions(const std::vector<std::uint8_t>& hole, const std::vecto
         if (!hole[i]) {
             continue;
         }
-        const int x = static_cast<int>(i % static_cast<std::size_t>(w));
-        const int y = static_cast<int>(i / static_cast<std::size_t>(w));
         bool beside_hit = false;
-        for_each_neighbour(x, y, w, h, [&](std::size_t u) { beside_hit |= coverage[u] > 0.0f; });
+        for_each_neighbour(i, w, h, [&](std::size_t u) { beside_hit |= coverage[u] > 0.0f; });
         if (beside_hit) {
             r.depth[i] = 1;
             frontier.push_back(i);
@@ -130,9 +115,7 @@ HoleRegions hole_regions(const std::vector<std::uint8_t>& hole, const std::vecto
     for (std::int32_t d = 2; !frontier.empty(); ++d) {
         next.clear();
         for (const std::size_t i : frontier) {
-            const int x = static_cast<int>(i % static_cast<std::size_t>(w));
-            const int y = static_cast<int>(i / static_cast<std::size_t>(w));
-            for_each_neighbour(x, y, w, h, [&](std::size_t u) {
+            for_each_neighbour(i, w, h, [&](std::size_t u) {
                 if (hole[u] && r.depth[u] == kUnreached) {
                     r.depth[u] = d;
                     next.push_back(u);
@@ -154,9 +137,7 @@ HoleRegions hole_regions(const std::vector<std::uint8_t>& hole, const std::vecto
             const std::size_t i = stack.back();
             stack.pop_back();
             deepest = std::max(deepest, r.depth[i]);
-            const int x = static_cast<int>(i % static_cast<std::size_t>(w));
-            const int y = static_cast<int>(i / static_cast<std::size_t>(w));
-            for_each_neighbour(x, y, w, h, [&](std::size_t u) {
+            for_each_neighbour(i, w, h, [&](std::size_t u) {
                 if (hole[u] && r.region[u] < 0) {
                     r.region[u] = id;
                     stack.push_back(u);

@@ -168,12 +168,12 @@ def _cmd_info(args) -> int:
 
 
 def fidelity_options(args) -> dict:
-    """The image options given on the command line (--spp, --filter, --blend, --hole-fill-px);
-    those left out keep the native renderer's defaults."""
+    """The image options given on the command line (--spp, --filter, --blend, --hole-fill-px,
+    --keep-inferred-hits); those left out keep the native renderer's defaults."""
     options = {key: value for key, value in (("spp", args.spp), ("filter", args.filter), ("blend", args.blend),
-                                             ("hole_fill", getattr(args, "hole_fill_px", None)))
+                                             ("hole_fill", args.hole_fill_px))
                if value is not None}
-    if getattr(args, "keep_inferred_hits", False):
+    if args.keep_inferred_hits:
         options["prefer_measured"] = False
     return options
 
