@@ -116,7 +116,8 @@ void bind_staged_bake(py::module_& m) {
         py::arg("cloud"), py::arg("settings") = py::dict(), py::arg("cache_dir") = "",
         "Start making a cloud ready to bake from; settings as bake_probe_set's keywords "
         "(resolution, splat_scale, hole_fill_texels, max_splat_radius_texels, normal_neighbours, "
-        "lod_texels, splat_edge_margin, splat_core_scale, face_the_probe); cache_dir as "
+        "lod_texels, lod_colour_tolerance, splat_edge_margin, splat_core_scale, face_the_probe); "
+        "cache_dir as "
         "bake_probe_set's. The Job's result is a CloudBakeSource.");
 
     py::class_<SpatialCloud, std::shared_ptr<SpatialCloud>>(

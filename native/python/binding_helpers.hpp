@@ -67,6 +67,8 @@ inline bool set_bake_setting(BakeSettings& s, const std::string& key, pybind11::
         s.max_splat_radius_texels = value.cast<int>();
     } else if (key == "lod_texels") {
         s.lod_texels = value.cast<float>();
+    } else if (key == "lod_colour_tolerance") {
+        s.lod_colour_tolerance = value.cast<float>();
     } else if (key == "splat_edge_margin") {
         s.splat_edge_margin = value.cast<float>();
     } else if (key == "face_the_probe") {

@@ -139,7 +139,7 @@ BakeRequest make_request(const std::string& folder, int resolution,
                          const std::string& sources_json, float splat_scale, int hole_fill_texels,
                          int max_splat_radius_texels, int normal_neighbours, float lod_texels,
                          float splat_edge_margin, float splat_core_scale,
-                         const std::string& cache_dir) {
+                         float lod_colour_tolerance, const std::string& cache_dir) {
     BakeRequest r;
     r.cache_dir = cache_dir;
     r.folder = folder;
@@ -157,6 +157,7 @@ BakeRequest make_request(const std::string& folder, int resolution,
     r.settings.lod_texels = lod_texels;
     r.settings.splat_edge_margin = splat_edge_margin;
     r.settings.splat_core_scale = splat_core_scale;
+    r.settings.lod_colour_tolerance = lod_colour_tolerance;
     r.geometry.normal_neighbours = normal_neighbours;
     return r;
 }
@@ -227,6 +228,7 @@ py::dict defaults_dict() {
     baking["lod_texels"] = as_written(bake.lod_texels);
     baking["splat_edge_margin"] = as_written(bake.splat_edge_margin);
     baking["splat_core_scale"] = as_written(bake.splat_core_scale);
+    baking["lod_colour_tolerance"] = as_written(bake.lod_colour_tolerance);
     baking["supersample"] = MeshBakeSettings{}.supersample;
     py::dict storage;
     storage["distance_step"] = kDefaultDistanceStep;
@@ -462,22 +464,22 @@ PYBIND11_MODULE(_native, m) {
         py::arg("world_offset") = py::none(), py::arg("columns") = "", py::arg("cache_dir") = "",
         py::arg("progress") = py::none(), "load_scans run to the end; see start_load_scans.");
 
-    auto start_bake_fn = [](std::shared_ptr<PointCloud> cloud, const std::string& folder,
-                            int resolution, std::vector<std::vector<double>> positions,
-                            std::optional<std::vector<double>> grid_min,
-                            std::optional<std::vector<double>> grid_max,
-                            std::optional<std::vector<int>> counts, bool positions_in_world,
-                            const std::string& sources_json, float splat_scale,
-                            int hole_fill_texels, int max_splat_radius_texels,
-                            int normal_neighbours, float lod_texels, float splat_edge_margin,
-                            float splat_core_scale, const std::string& cache_dir) {
-        return start_bake(std::move(cloud),
-                          make_request(folder, resolution, std::move(positions),
-                                       std::move(grid_min), std::move(grid_max), std::move(counts),
-                                       positions_in_world, sources_json, splat_scale,
-                                       hole_fill_texels, max_splat_radius_texels, normal_neighbours,
-                                       lod_texels, splat_edge_margin, splat_core_scale, cache_dir));
-    };
+    auto start_bake_fn =
+        [](std::shared_ptr<PointCloud> cloud, const std::string& folder, int resolution,
+           std::vector<std::vector<double>> positions, std::optional<std::vector<double>> grid_min,
+           std::optional<std::vector<double>> grid_max, std::optional<std::vector<int>> counts,
+           bool positions_in_world, const std::string& sources_json, float splat_scale,
+           int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours,
+           float lod_texels, float splat_edge_margin, float splat_core_scale,
+           float lod_colour_tolerance, const std::string& cache_dir) {
+            return start_bake(std::move(cloud),
+                              make_request(folder, resolution, std::move(positions),
+                                           std::move(grid_min), std::move(grid_max),
+                                           std::move(counts), positions_in_world, sources_json,
+                                           splat_scale, hole_fill_texels, max_splat_radius_texels,
+                                           normal_neighbours, lod_texels, splat_edge_margin,
+                                           splat_core_scale, lod_colour_tolerance, cache_dir));
+        };
     const BakeSettings defaults;
     const LocalGeometryOptions geometry_defaults;
     m.def("start_bake_probe_set", start_bake_fn, py::arg("cloud"), py::arg("folder"),
@@ -491,11 +493,16 @@ PYBIND11_MODULE(_native, m) {
           py::arg("normal_neighbours") = geometry_defaults.normal_neighbours,
           py::arg("lod_texels") = defaults.lod_texels,
           py::arg("splat_edge_margin") = defaults.splat_edge_margin,
-          py::arg("splat_core_scale") = defaults.splat_core_scale, py::arg("cache_dir") = "",
+          py::arg("splat_core_scale") = defaults.splat_core_scale,
+          py::arg("lod_colour_tolerance") = defaults.lod_colour_tolerance,
+          py::arg("cache_dir") = "",
           "Start baking a probe set from a cloud into `folder`; positions or grid corners are "
           "world coordinates unless positions_in_world is False. lod_texels: how many texels "
           "apart the point hierarchy's cell surfels may be where they stand in for points (0: "
-          "every point). cache_dir: the cloud's normals, spacing and point hierarchy are read "
+          "every point). lod_colour_tolerance: above 0, a cell up to twice as wide also stands in "
+          "where "
+          "its children's colours agree with its own within this much per channel (linear). "
+          "cache_dir: the cloud's normals, spacing and point hierarchy are read "
           "from this folder's prepared-cloud cache when it holds them, and written there "
           "otherwise (empty: computed, not cached). The Job's result is a summary dict.");
     m.def(
@@ -507,12 +514,12 @@ PYBIND11_MODULE(_native, m) {
             bool positions_in_world, const std::string& sources_json, float splat_scale,
             int hole_fill_texels, int max_splat_radius_texels, int normal_neighbours,
             float lod_texels, float splat_edge_margin, float splat_core_scale,
-            const std::string& cache_dir, const py::object& progress) {
-            auto job = start_bake_fn(std::move(cloud), folder, resolution, std::move(positions),
-                                     std::move(grid_min), std::move(grid_max), std::move(counts),
-                                     positions_in_world, sources_json, splat_scale,
-                                     hole_fill_texels, max_splat_radius_texels, normal_neighbours,
-                                     lod_texels, splat_edge_margin, splat_core_scale, cache_dir);
+            float lod_colour_tolerance, const std::string& cache_dir, const py::object& progress) {
+            auto job = start_bake_fn(
+                std::move(cloud), folder, resolution, std::move(positions), std::move(grid_min),
+                std::move(grid_max), std::move(counts), positions_in_world, sources_json,
+                splat_scale, hole_fill_texels, max_splat_radius_texels, normal_neighbours,
+                lod_texels, splat_edge_margin, splat_core_scale, lod_colour_tolerance, cache_dir);
             return job->run(progress);
         },
         py::arg("cloud"), py::arg("folder"), py::arg("resolution") = defaults.resolution,
@@ -525,7 +532,8 @@ PYBIND11_MODULE(_native, m) {
         py::arg("normal_neighbours") = geometry_defaults.normal_neighbours,
         py::arg("lod_texels") = defaults.lod_texels,
         py::arg("splat_edge_margin") = defaults.splat_edge_margin,
-        py::arg("splat_core_scale") = defaults.splat_core_scale, py::arg("cache_dir") = "",
+        py::arg("splat_core_scale") = defaults.splat_core_scale,
+        py::arg("lod_colour_tolerance") = defaults.lod_colour_tolerance, py::arg("cache_dir") = "",
         py::arg("progress") = py::none(), "bake run to the end; see start_bake_probe_set.");
 
     lfprobe::python::bind_render(m);

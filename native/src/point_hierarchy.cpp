@@ -330,8 +330,53 @@ run_of(std::span<const std::uint32_t> runs, std::size_t cell, std::size_t limit,
     return {first, last};
 }
 
+CellSurfel surfel_at(const PointHierarchyView::Level& level, std::uint32_t i) {
+    CellSurfel s;
+    std::memcpy(static_cast<void*>(&s), level.surfels + std::size_t{i} * sizeof(CellSurfel),
+                sizeof(CellSurfel));
+    return s;
+}
+
+// Whether the surfels of cell `cell`'s children (surfels [first_surfel, last_surfel) are its
+// own) say no more than its own: each within `colour_tolerance` per channel of the cell's
+// surfel of the same facing, and within `plane_tolerance` of that surfel's plane.
+bool children_agree(const PointHierarchyView& h, std::size_t level_index, std::size_t cell,
+                    std::uint32_t first_surfel, std::uint32_t last_surfel, float colour_tolerance,
+                    float plane_tolerance) {
+    const PointHierarchyView::Level& level = h.levels[level_index];
+    const PointHierarchyView::Level& below = h.levels[level_index - 1];
+    std::array<CellSurfel, kFacings> own{};
+    std::array<bool, kFacings> has{};
+    for (std::uint32_t k = first_surfel; k < last_surfel; ++k) {
+        const CellSurfel s = surfel_at(level, k);
+        if (s.facing >= kFacings) {
+            return false;
+        }
+        own[s.facing] = s;
+        has[s.facing] = true;
+    }
+    const auto [first_child, last_child] =
+        run_of(level.first_child, cell, below.cell_count(), "children");
+    for (std::uint32_t child = first_child; child < last_child; ++child) {
+        const auto [first, last] = run_of(below.first_surfel, child, below.surfel_count, "surfels");
+        for (std::uint32_t k = first; k < last; ++k) {
+            const CellSurfel c = surfel_at(below, k);
+            if (c.facing >= kFacings || !has[c.facing]) {
+                return false;
+            }
+            const CellSurfel& p = own[c.facing];
+            const glm::vec3 dc = glm::abs(c.colour - p.colour);
+            if (!(std::max({dc.x, dc.y, dc.z}) <= colour_tolerance) ||
+                !(std::abs(glm::dot(p.normal, c.position - p.position)) <= plane_tolerance)) {
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
 void collect(const PointHierarchyView& h, std::size_t level_index, std::size_t cell,
-             const glm::vec3& centre, float reach, HierarchyCut& out) {
+             const glm::vec3& centre, const CutRule& rule, HierarchyCut& out) {
     const PointHierarchyView::Level& level = h.levels[level_index];
     const glm::u64vec3 c = morton::cell(level.cell_keys[cell]);
     const glm::vec3 lo = h.origin + glm::vec3(c) * level.cell_size;
@@ -348,7 +393,13 @@ void collect(const PointHierarchyView& h, std::size_t level_index, std::size_t c
         throw IoError("point hierarchy: a cell holds more surfels than facings (the hierarchy's "
                       "file is damaged)");
     }
-    if (level.cell_size <= reach * d && points >= kMinPointsPerSurfel * surfels) {
+    const float reach = rule.lod_texels * rule.texel_angle * d; // lod_texels texels at d
+    const bool fine_enough = level.cell_size <= reach;
+    const bool agrees = !fine_enough && rule.colour_tolerance > 0.0f && level_index > 0 &&
+                        level.cell_size <= 2.0f * reach &&
+                        children_agree(h, level_index, cell, first_surfel, last_surfel,
+                                       rule.colour_tolerance, 0.5f * rule.texel_angle * d);
+    if ((fine_enough || agrees) && points >= kMinPointsPerSurfel * surfels) {
         const std::size_t at = out.surfels.size();
         out.surfels.resize(at + surfels);
         if (surfels > 0) {
@@ -394,7 +445,7 @@ void collect(const PointHierarchyView& h, std::size_t level_index, std::size_t c
                       "hierarchy's file is damaged)");
     }
     for (std::uint32_t child = first_child; child < last_child; ++child) {
-        collect(h, level_index - 1, child, centre, reach, out);
+        collect(h, level_index - 1, child, centre, rule, out);
     }
 }
 
@@ -423,19 +474,28 @@ PointHierarchyView PointHierarchyView::of(const PointHierarchy& hierarchy) {
 
 HierarchyCut cut_for_probe(const PointHierarchy& hierarchy, const glm::dvec3& centre,
                            float texel_angle, float lod_texels, Progress* progress) {
-    if (hierarchy.levels.empty() || !(lod_texels > 0.0f)) {
-        HierarchyCut cut;
-        cut.points = hierarchy.order;
-        return cut;
-    }
-    return cut_for_probe(PointHierarchyView::of(hierarchy), centre, texel_angle, lod_texels,
-                         progress);
+    return cut_for_probe(hierarchy, centre, CutRule{texel_angle, lod_texels, 0.0f}, progress);
 }
 
 HierarchyCut cut_for_probe(const PointHierarchyView& hierarchy, const glm::dvec3& centre,
                            float texel_angle, float lod_texels, Progress* progress) {
+    return cut_for_probe(hierarchy, centre, CutRule{texel_angle, lod_texels, 0.0f}, progress);
+}
+
+HierarchyCut cut_for_probe(const PointHierarchy& hierarchy, const glm::dvec3& centre,
+                           const CutRule& rule, Progress* progress) {
+    if (hierarchy.levels.empty() || !(rule.lod_texels > 0.0f)) {
+        HierarchyCut cut;
+        cut.points = hierarchy.order;
+        return cut;
+    }
+    return cut_for_probe(PointHierarchyView::of(hierarchy), centre, rule, progress);
+}
+
+HierarchyCut cut_for_probe(const PointHierarchyView& hierarchy, const glm::dvec3& centre,
+                           const CutRule& rule, Progress* progress) {
     HierarchyCut cut;
-    if (hierarchy.levels.empty() || !(lod_texels > 0.0f)) {
+    if (hierarchy.levels.empty() || !(rule.lod_texels > 0.0f)) {
         if (hierarchy.order.empty()) {
             cut.points.resize(hierarchy.point_count);
             for (std::size_t k = 0; k < cut.points.size(); ++k) {
@@ -466,13 +526,12 @@ HierarchyCut cut_for_probe(const PointHierarchyView& hierarchy, const glm::dvec3
         }
     }
     const glm::vec3 c(centre);
-    const float reach = lod_texels * texel_angle;
     std::vector<HierarchyCut> parts(top.cell_count());
     tbb::parallel_for(std::size_t{0}, top.cell_count(), [&](std::size_t cell) {
         if (progress != nullptr) {
             progress->throw_if_cancelled();
         }
-        collect(hierarchy, hierarchy.levels.size() - 1, cell, c, reach, parts[cell]);
+        collect(hierarchy, hierarchy.levels.size() - 1, cell, c, rule, parts[cell]);
     });
     std::size_t points = 0;
     std::size_t surfels = 0;

@@ -415,6 +415,10 @@ float texel_angle_of(const BakeSettings& settings) {
     return static_cast<float>(oct::kTexelAngleTimesN) / static_cast<float>(settings.resolution);
 }
 
+CutRule cut_rule_of(const BakeSettings& settings) {
+    return {texel_angle_of(settings), settings.lod_texels, settings.lod_colour_tolerance};
+}
+
 void check_bake_arguments(const BakeSettings& settings, std::size_t points,
                           const LocalGeometry& geometry, const glm::dvec3& centre) {
     const int n = settings.resolution;
@@ -426,6 +430,10 @@ void check_bake_arguments(const BakeSettings& settings, std::size_t points,
     }
     if (!(settings.lod_texels >= 0.0f) || !std::isfinite(settings.lod_texels)) {
         throw InputError("bake: lod_texels must be a finite number of texels, 0 or more");
+    }
+    if (!(settings.lod_colour_tolerance >= 0.0f) || !std::isfinite(settings.lod_colour_tolerance)) {
+        throw InputError(
+            "bake: lod_colour_tolerance must be a finite colour difference, 0 or more");
     }
     if (points > std::numeric_limits<std::uint32_t>::max()) {
         throw InputError("bake: at most 2^32-1 points per cloud");
@@ -736,8 +744,7 @@ ProbeMap bake_probe_from_hierarchy(const PointCloud& cloud, const LocalGeometry&
     if (hierarchy.order.size() != cloud.size()) {
         throw InputError("bake: the point hierarchy does not belong to this cloud");
     }
-    const HierarchyCut cut =
-        cut_for_probe(hierarchy, centre, texel_angle_of(settings), settings.lod_texels, progress);
+    const HierarchyCut cut = cut_for_probe(hierarchy, centre, cut_rule_of(settings), progress);
     const PointColours colours(cloud, hierarchy.intensity);
     return bake_from(CutPoints{cloud, geometry, colours, cut, true}, centre, settings, progress);
 }
@@ -756,8 +763,7 @@ HierarchyCut cut_for_bake(const PointHierarchyView& hierarchy, const glm::dvec3&
     if (!(std::isfinite(centre.x) && std::isfinite(centre.y) && std::isfinite(centre.z))) {
         throw InputError("bake: probe position must be finite");
     }
-    return cut_for_probe(hierarchy, centre, texel_angle_of(settings), settings.lod_texels,
-                         progress);
+    return cut_for_probe(hierarchy, centre, cut_rule_of(settings), progress);
 }
 
 ProbeMap bake_probe_from_gathered_cut(const PointCloud& points, const LocalGeometry& geometry,

@@ -305,6 +305,7 @@ json splat_settings_json(const BakeSettings& settings) {
                 {"hole_fill_texels", settings.hole_fill_texels},
                 {"min_distance", settings.min_distance},
                 {"lod_texels", settings.lod_texels},
+                {"lod_colour_tolerance", settings.lod_colour_tolerance},
                 {"splat_edge_margin", settings.splat_edge_margin},
                 {"face_the_probe", settings.face_the_probe}};
 }

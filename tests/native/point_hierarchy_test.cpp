@@ -1,9 +1,11 @@
 // The point hierarchy (docs/DESIGN.md §4, "Point hierarchy"): a probe baked from its cut sees
 // what a probe baked from every point sees, at a cost that follows its texels.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
 #include <random>
+#include <string>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -198,4 +200,59 @@ TEST(PointHierarchy, RejectsGeometryOfAnotherCloud) {
     const PointCloud other = dense_wall(0.1f, 0.5f, glm::vec3(0.5f));
     const LocalGeometry geometry = estimate_local_geometry(other, {});
     EXPECT_THROW((void)build_point_hierarchy(cloud, geometry), InputError);
+}
+
+TEST(PointHierarchy, AColourToleranceCoarsensOnlyWhereTheChildrenAgree) {
+    // Two walls of 2 mm pitch seen face-on at 128²: one of one colour, one striped across y in
+    // a triangle wave of 10 cm period (no flat part). With a colour tolerance, the plain wall's
+    // cut takes the wider cells (far fewer surfels); on both, every texel keeps within about
+    // the tolerance of the colour the cut without it gives, and none is lost.
+    constexpr float kTolerance = 0.01f;
+    const float texel_angle = static_cast<float>(oct::kTexelAngleTimesN) / 128.0f;
+    BakeSettings plain_settings;
+    plain_settings.resolution = 128;
+    BakeSettings tolerant_settings = plain_settings;
+    tolerant_settings.lod_colour_tolerance = kTolerance;
+    for (const bool striped : {false, true}) {
+        PointCloud cloud = dense_wall(0.002f, 0.6f, glm::vec3(0.3f, 0.55f, 0.8f));
+        if (striped) {
+            for (std::size_t i = 0; i < cloud.size(); ++i) {
+                const float y = cloud.positions[i].y / 0.1f;
+                const float phase = y - std::floor(y);
+                cloud.colors[i].x = 0.1f + 0.8f * (1.0f - std::abs(2.0f * phase - 1.0f));
+            }
+        }
+        const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+        const PointHierarchy hierarchy = build_point_hierarchy(cloud, geometry);
+        for (const double d : {0.5, 1.0, 3.0}) {
+            SCOPED_TRACE(std::string(striped ? "striped" : "plain") + " wall, probe " +
+                         std::to_string(d) + " m away");
+            const glm::dvec3 probe(-d, 0.05, -0.03);
+            const HierarchyCut plain =
+                cut_for_probe(hierarchy, probe, CutRule{texel_angle, 1.0f, 0.0f});
+            const HierarchyCut tolerant =
+                cut_for_probe(hierarchy, probe, CutRule{texel_angle, 1.0f, kTolerance});
+            EXPECT_LE(tolerant.size(), plain.size());
+            if (!striped && d < 2.0) { // from 3 m the cut is the coarsest level's cells already
+                EXPECT_LT(2 * tolerant.size(), plain.size())
+                    << "the plain wall's wider cells agree";
+            }
+            const ProbeMap a =
+                bake_probe_from_hierarchy(cloud, geometry, hierarchy, probe, plain_settings);
+            const ProbeMap b =
+                bake_probe_from_hierarchy(cloud, geometry, hierarchy, probe, tolerant_settings);
+            std::size_t compared = 0;
+            for (std::size_t t = 0; t < a.texel_count(); ++t) {
+                if (a.state(t) != TexelState::Surface) {
+                    continue;
+                }
+                ASSERT_TRUE(known(b.state(t))) << "texel " << t << " lost";
+                EXPECT_NEAR(b.distance_at(t), a.distance_at(t), 0.01f * a.distance_at(t)) << t;
+                const glm::vec3 delta = glm::abs(b.radiance_at(t) - a.radiance_at(t));
+                EXPECT_LE(std::max({delta.x, delta.y, delta.z}), 2.0f * kTolerance) << t;
+                ++compared;
+            }
+            EXPECT_GT(compared, 10u);
+        }
+    }
 }

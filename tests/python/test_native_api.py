@@ -174,6 +174,24 @@ def test_lod_texels_reaches_the_bake_and_its_manifest(native, tmp_path):
                               lod_texels=float("nan"))
 
 
+def test_lod_colour_tolerance_reaches_the_bake_and_its_manifest(native, tmp_path):
+    """lod_colour_tolerance (wider cells where their children agree) is an option of the plain and
+    the planned bake, off by default, recorded in the manifest and checked."""
+    assert native.DEFAULTS["bake"]["lod_colour_tolerance"] == 0.0
+    cloud = box_cloud(native)
+    probe = [[0.0, 0.0, 1.25]]
+    native.bake_probe_set(cloud, str(tmp_path / "plain"), resolution=64, positions=probe,
+                          lod_colour_tolerance=0.01)
+    native.start_bake_planned_probe_set(cloud, str(tmp_path / "planned"), positions=probe,
+                                        options={"lod_colour_tolerance": 0.02}).run()
+    for name, expected in (("plain", 0.01), ("planned", 0.02)):
+        bake = json.loads((tmp_path / name / "manifest.json").read_text())["bake"]
+        assert bake["lod_colour_tolerance"] == pytest.approx(expected)
+    with pytest.raises(ValueError, match="lod_colour_tolerance must be a finite colour difference"):
+        native.bake_probe_set(cloud, str(tmp_path / "bad"), resolution=64, positions=probe,
+                              lod_colour_tolerance=-1.0)
+
+
 def test_clouds_from_arrays_keep_intensities_and_scan_paths(native):
     """An array cloud (E57/LAS readers, the add-on's moved scans) keeps the scanner's intensity
     and the file of each scan, and refuses what does not fit."""

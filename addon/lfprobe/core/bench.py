@@ -231,9 +231,11 @@ def probe_errors(probe: dict, reference: dict) -> dict:
     }
 
 
-def hierarchy_benchmark(points: int, resolution: int, lods: list, reference: dict, tmp: str) -> dict:
+def hierarchy_benchmark(points: int, resolution: int, lods: list, reference: dict, tmp: str,
+                        colour_tolerance: float = 0.0) -> dict:
     """One probe baked from a generated room of `points` points, once per lod_texels in `lods`
-    (0: every point splatted, as before the point hierarchy), each against the exact probe."""
+    (0: every point splatted, as before the point hierarchy), and with colour_tolerance above 0
+    once more at lod_texels 1 with that lod_colour_tolerance; each against the exact probe."""
     _native = native.load()
     start = time.perf_counter()
     positions, colors = room_cloud(points)
@@ -242,14 +244,18 @@ def hierarchy_benchmark(points: int, resolution: int, lods: list, reference: dic
     del positions, colors
     row = {"points": points, "resolution": resolution, "generate_seconds": generate_seconds,
            "bakes": []}
-    for lod in lods:
-        folder = os.path.join(tmp, f"lod_{lod}")
+    variants = [(float(lod), 0.0) for lod in lods]
+    if colour_tolerance > 0.0:
+        variants.append((1.0, float(colour_tolerance)))
+    for lod, tolerance in variants:
+        folder = os.path.join(tmp, f"lod_{lod}_{tolerance}")
         summary = _native.bake_probe_set(cloud, folder, resolution=resolution,
                                          positions=[HIERARCHY_PROBE], positions_in_world=False,
-                                         lod_texels=float(lod))
+                                         lod_texels=lod, lod_colour_tolerance=tolerance)
         probe = _native.read_probe(os.path.join(folder, "probe_00000.exr"))
         shutil.rmtree(folder, ignore_errors=True)
-        row["bakes"].append({"lod_texels": lod, "normals_seconds": summary["normals_seconds"],
+        row["bakes"].append({"lod_texels": lod, "lod_colour_tolerance": tolerance,
+                             "normals_seconds": summary["normals_seconds"],
                              "hierarchy_seconds": summary["hierarchy_seconds"],
                              "bake_seconds": summary["bake_seconds"],
                              **probe_errors(probe, reference)})
@@ -374,23 +380,29 @@ def main(args) -> int:
             reference = reference_probe(args.res, tmp)
             rows = []
             for points in points_list:
-                row = hierarchy_benchmark(points, args.res, lods, reference, tmp)
+                row = hierarchy_benchmark(points, args.res, lods, reference, tmp,
+                                          args.hierarchy_colour_tolerance)
                 rows.append(row)
                 base = row["bakes"][0]
                 print(f"{points:,} points (generated in {row['generate_seconds']:.1f} s; normals + "
                       f"spacing {base['normals_seconds']:.2f} s on {os.cpu_count()} cores):")
                 for b in row["bakes"]:
-                    print(f"  lod_texels {b['lod_texels']:g}: bake {b['bake_seconds']:.2f} s"
+                    tolerance = (f", colour tolerance {b['lod_colour_tolerance']:g}"
+                                 if b["lod_colour_tolerance"] > 0 else "")
+                    print(f"  lod_texels {b['lod_texels']:g}{tolerance}: bake {b['bake_seconds']:.2f} s"
                           f" (+ hierarchy {b['hierarchy_seconds']:.2f} s once per cloud), "
                           f"PSNR {b['psnr_db']:.2f} dB, depth error mean {100 * b['depth_error_mean']:.3f} %"
                           f" p99 {100 * b['depth_error_p99']:.3f} %, unknown {100 * b['unknown_share']:.3f} %;"
                           f" {base['bake_seconds'] / b['bake_seconds']:.2f}× the all-points bake's speed,"
                           f" {b['psnr_db'] - base['psnr_db']:+.2f} dB")
             if len(rows) > 1:
-                first, last = rows[0]["bakes"][-1], rows[-1]["bakes"][-1]
-                print(f"  {rows[-1]['points'] / rows[0]['points']:.0f}× the points: the hierarchy bake "
-                      f"(lod_texels {first['lod_texels']:g}) takes {last['bake_seconds'] / first['bake_seconds']:.2f}× "
-                      f"the time, every point {rows[-1]['bakes'][0]['bake_seconds'] / rows[0]['bakes'][0]['bake_seconds']:.2f}×")
+                for first, last in zip(rows[0]["bakes"], rows[-1]["bakes"]):
+                    what = (f"lod_texels {first['lod_texels']:g}" if first["lod_texels"] > 0 else "every point")
+                    if first["lod_colour_tolerance"] > 0:
+                        what += f", colour tolerance {first['lod_colour_tolerance']:g}"
+                    print(f"  {rows[-1]['points'] / rows[0]['points']:.0f}× the points ({what}): "
+                          f"{last['bake_seconds'] / first['bake_seconds']:.2f}× the bake time, "
+                          f"{last['psnr_db'] - first['psnr_db']:+.2f} dB")
             results["hierarchy"] = rows
         write_results(args.json, results)
         return 0

@@ -279,6 +279,7 @@ def bake_scans_on_cluster(
                     "hole_fill_texels": int(options.hole_fill_texels),
                     "normal_neighbours": int(options.normal_neighbours),
                     "lod_texels": float(options.lod_texels),
+                    "lod_colour_tolerance": float(options.lod_colour_tolerance),
                     "splat_edge_margin": float(options.splat_edge_margin),
                     "splat_core_scale": float(options.splat_core_scale)}
         spec = CloudSpec(

@@ -3,7 +3,7 @@
 of writing their own copies. ``trace(name)``: mode, thickness, fallback_thickness, use_coarse_levels, max_probes, max_probes_per_ray,
 filter, blend, spp, tile_size, hole_fill, prefer_measured; ``bake(name)``: resolution, splat_scale, hole_fill_texels,
 max_splat_radius_texels, normal_neighbours, lod_texels, splat_edge_margin, splat_core_scale,
-supersample;
+lod_colour_tolerance, supersample;
 ``storage(name)``: distance_step."""
 
 from __future__ import annotations

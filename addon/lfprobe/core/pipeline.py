@@ -56,6 +56,9 @@ class BakeOptions:
     # Scan bakes: how many texels apart the point hierarchy's cell surfels may be where they
     # stand in for the points (0: every point is splatted).
     lod_texels: float = field(default_factory=lambda: defaults.bake("lod_texels"))
+    # Scan bakes: above 0, cells up to twice lod_texels wide also stand in where their
+    # children's colours agree with theirs within this much per channel (linear); 0: off.
+    lod_colour_tolerance: float = field(default_factory=lambda: defaults.bake("lod_colour_tolerance"))
     # Scan bakes: how far, in point spacings, a point at its surface's edge splats outward
     # (negative: full discs, which grow every silhouette by the splat radius).
     splat_edge_margin: float = field(default_factory=lambda: defaults.bake("splat_edge_margin"))
@@ -143,6 +146,7 @@ def bake_from_cloud(
         plan = {"resolution": int(options.resolution), "splat_scale": float(options.splat_scale),
                 "hole_fill_texels": int(options.hole_fill_texels),
                 "lod_texels": float(options.lod_texels),
+                "lod_colour_tolerance": float(options.lod_colour_tolerance),
                 "splat_edge_margin": float(options.splat_edge_margin),
                 "splat_core_scale": float(options.splat_core_scale), **options.plan}
         job = _native.start_bake_planned_probe_set(cloud, out_dir, **where, options=plan,
@@ -155,6 +159,7 @@ def bake_from_cloud(
                       hole_fill_texels=int(options.hole_fill_texels),
                       normal_neighbours=int(options.normal_neighbours),
                       lod_texels=float(options.lod_texels),
+                      lod_colour_tolerance=float(options.lod_colour_tolerance),
                       splat_edge_margin=float(options.splat_edge_margin),
                       splat_core_scale=float(options.splat_core_scale), cache_dir=cache_dir or "")
         if start_only:

@@ -110,6 +110,23 @@ struct HierarchyCut {
     [[nodiscard]] std::size_t size() const { return points.size() + surfels.size(); }
 };
 
+// How a probe's cut is chosen: a cell's surfels stand in for its points where the cell spans at
+// most `lod_texels` texels (`texel_angle` radians each) at its nearest point to the probe; with a
+// colour tolerance above 0, also where it spans at most twice that and its children's surfels
+// agree with its own (colours within the tolerance per channel, points within half a texel of
+// its plane): there the children would add nothing the tolerance counts.
+struct CutRule {
+    float texel_angle = 0.0f;
+    float lod_texels = 0.0f;
+    float colour_tolerance = 0.0f;
+};
+
+[[nodiscard]] HierarchyCut cut_for_probe(const PointHierarchyView& hierarchy,
+                                         const glm::dvec3& centre, const CutRule& rule,
+                                         Progress* progress = nullptr);
+[[nodiscard]] HierarchyCut cut_for_probe(const PointHierarchy& hierarchy, const glm::dvec3& centre,
+                                         const CutRule& rule, Progress* progress = nullptr);
+
 // The cut for a probe at `centre` (local frame) whose texels are `texel_angle` radians across:
 // a cell's surfels stand in for its points where the cell spans at most `lod_texels` texels at
 // its nearest point to the probe. Deterministic order.

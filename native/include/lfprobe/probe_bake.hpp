@@ -67,6 +67,12 @@ struct BakeSettings {
     // for its points where they are at most this many texels apart as the probe sees them;
     // 0 bakes every point.
     float lod_texels = 1.0f;
+    // Above 0, a cell of up to twice lod_texels texels also stands in for its points where its
+    // children's surfels agree with its own: their colours within this much per channel
+    // (linear) and their points within half a texel of its plane. Where the cloud is much
+    // denser than the probe's texels and its colour smooth, the bake then takes about a quarter
+    // of the surfels; 0 (the default) keeps to lod_texels.
+    float lod_colour_tolerance = 0.0f;
 };
 
 // Bakes one probe at `centre` (local frame). `geometry` comes from estimate_local_geometry on
