@@ -21,7 +21,7 @@ constexpr double kMinCosine = 0.05;
 
 // Candidate probes ordered by squared distance to the point, ties by position: nothing
 // depends on the probes' order in the set.
-struct Candidate {
+struct BlendCandidate {
     double distance2;
     glm::dvec3 position;
     std::size_t index;
@@ -31,7 +31,7 @@ bool by_position(const glm::dvec3& a, const glm::dvec3& b) {
     return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
 }
 
-bool nearer(const Candidate& a, const Candidate& b) {
+bool nearer(const BlendCandidate& a, const BlendCandidate& b) {
     if (a.distance2 != b.distance2) {
         return a.distance2 < b.distance2;
     }
@@ -44,12 +44,12 @@ bool nearer(const Candidate& a, const Candidate& b) {
 std::size_t candidates_around(const ProbeField& field, const glm::dvec3& point,
                               std::size_t answered, std::size_t wanted,
                               std::array<std::size_t, kMaxBlend>& out) {
-    std::array<Candidate, kMaxBlend> best{};
+    std::array<BlendCandidate, kMaxBlend> best{};
     std::size_t kept = 0;
     auto offer = [&](std::size_t index) {
         const glm::dvec3 position = field.probe_position(index);
         const glm::dvec3 to = position - point;
-        const Candidate c{glm::dot(to, to), position, index};
+        const BlendCandidate c{glm::dot(to, to), position, index};
         if (kept < wanted) {
             best[kept++] = c;
         } else if (nearer(c, best[kept - 1])) {
