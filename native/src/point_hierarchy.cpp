@@ -473,16 +473,6 @@ PointHierarchyView PointHierarchyView::of(const PointHierarchy& hierarchy) {
 }
 
 HierarchyCut cut_for_probe(const PointHierarchy& hierarchy, const glm::dvec3& centre,
-                           float texel_angle, float lod_texels, Progress* progress) {
-    return cut_for_probe(hierarchy, centre, CutRule{texel_angle, lod_texels, 0.0f}, progress);
-}
-
-HierarchyCut cut_for_probe(const PointHierarchyView& hierarchy, const glm::dvec3& centre,
-                           float texel_angle, float lod_texels, Progress* progress) {
-    return cut_for_probe(hierarchy, centre, CutRule{texel_angle, lod_texels, 0.0f}, progress);
-}
-
-HierarchyCut cut_for_probe(const PointHierarchy& hierarchy, const glm::dvec3& centre,
                            const CutRule& rule, Progress* progress) {
     if (hierarchy.levels.empty() || !(rule.lod_texels > 0.0f)) {
         HierarchyCut cut;

@@ -56,7 +56,8 @@ TEST(PointHierarchy, TheCutNeverLeavesAHoleTheFullCloudFills) {
     for (const double d : {0.3, 1.0, 3.0, 12.0}) {
         SCOPED_TRACE("probe " + std::to_string(d) + " m from the wall");
         const glm::dvec3 probe(-d, 0.05, -0.03);
-        const HierarchyCut cut = cut_for_probe(hierarchy, probe, texel_angle, settings.lod_texels);
+        const HierarchyCut cut =
+            cut_for_probe(hierarchy, probe, CutRule{texel_angle, settings.lod_texels, 0.0f});
         if (d >= 1.0) {
             EXPECT_LT(cut.size(), cloud.size() / 20) << "the cut must stand in for the points";
         }
@@ -119,7 +120,8 @@ TEST(PointHierarchy, AThinPlatesBackNeverColoursItsFront) {
     settings.resolution = 128;
     const glm::dvec3 probe(-3.0, 0.02, 0.01);
     const float texel_angle = static_cast<float>(oct::kTexelAngleTimesN) / 128.0f;
-    const HierarchyCut cut = cut_for_probe(hierarchy, probe, texel_angle, settings.lod_texels);
+    const HierarchyCut cut =
+        cut_for_probe(hierarchy, probe, CutRule{texel_angle, settings.lod_texels, 0.0f});
     ASSERT_TRUE(cut.points.empty());
     const ProbeMap lod = bake_probe_from_hierarchy(cloud, geometry, hierarchy, probe, settings);
     std::size_t front_texels = 0;

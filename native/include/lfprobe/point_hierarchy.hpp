@@ -121,22 +121,13 @@ struct CutRule {
     float colour_tolerance = 0.0f;
 };
 
+// The cut for a probe at `centre` (local frame), in a deterministic order. Over a view, every
+// run a visited cell names is checked against its array, so a damaged mapped file gives
+// IoError, never a read out of bounds.
 [[nodiscard]] HierarchyCut cut_for_probe(const PointHierarchyView& hierarchy,
                                          const glm::dvec3& centre, const CutRule& rule,
                                          Progress* progress = nullptr);
 [[nodiscard]] HierarchyCut cut_for_probe(const PointHierarchy& hierarchy, const glm::dvec3& centre,
                                          const CutRule& rule, Progress* progress = nullptr);
-
-// The cut for a probe at `centre` (local frame) whose texels are `texel_angle` radians across:
-// a cell's surfels stand in for its points where the cell spans at most `lod_texels` texels at
-// its nearest point to the probe. Deterministic order.
-[[nodiscard]] HierarchyCut cut_for_probe(const PointHierarchy& hierarchy, const glm::dvec3& centre,
-                                         float texel_angle, float lod_texels,
-                                         Progress* progress = nullptr);
-// The same cut over a view. Every run a visited cell names is checked against its array, so a
-// damaged mapped file gives IoError, never a read out of bounds.
-[[nodiscard]] HierarchyCut cut_for_probe(const PointHierarchyView& hierarchy,
-                                         const glm::dvec3& centre, float texel_angle,
-                                         float lod_texels, Progress* progress = nullptr);
 
 } // namespace lfprobe
