@@ -72,6 +72,70 @@ double VoxelMask::last_set_t(const Ray& ray, double t_from, double t_to) const {
     return last_set_span(ray, t_from, t_to).second;
 }
 
+std::pair<double, double> VoxelMask::first_unset_span(const Ray& ray, double t_from,
+                                                      double t_to) const {
+    constexpr double none = std::numeric_limits<double>::infinity();
+    if (bits_.empty()) {
+        return {none, none};
+    }
+    double lo = t_from;
+    double hi = t_to;
+    for (int a = 0; a < 3; ++a) {
+        clip_to_slab(ray, a, origin_[a], origin_[a] + voxel_ * dims_[static_cast<std::size_t>(a)],
+                     lo, hi);
+    }
+    if (!(lo <= hi) || !std::isfinite(lo)) {
+        return {none, none};
+    }
+    // Walk the voxels forwards from `lo` (the mirror of last_set_span's walk).
+    std::array<int, 3> cell{};
+    std::array<int, 3> step{};
+    std::array<double, 3> t_cross{}; // where the walk leaves the cell on each axis
+    std::array<double, 3> t_delta{};
+    const glm::dvec3 p = ray.at(lo);
+    for (int a = 0; a < 3; ++a) {
+        const auto k = static_cast<std::size_t>(a);
+        const double u = (p[a] - origin_[a]) / voxel_;
+        cell[k] = std::clamp(static_cast<int>(std::floor(u)), 0, dims_[k] - 1);
+        const double d = ray.direction[a];
+        if (d > 0.0) {
+            step[k] = 1;
+            t_cross[k] = (origin_[a] + voxel_ * (cell[k] + 1) - ray.origin[a]) / d;
+            t_delta[k] = voxel_ / d;
+        } else if (d < 0.0) {
+            step[k] = -1;
+            t_cross[k] = (origin_[a] + voxel_ * cell[k] - ray.origin[a]) / d;
+            t_delta[k] = -voxel_ / d;
+        } else {
+            step[k] = 0;
+            t_cross[k] = none;
+            t_delta[k] = 0.0;
+        }
+    }
+    double t = lo;
+    for (;;) {
+        std::size_t axis = 0;
+        if (t_cross[1] < t_cross[axis]) {
+            axis = 1;
+        }
+        if (t_cross[2] < t_cross[axis]) {
+            axis = 2;
+        }
+        if (!is_set(cell[0], cell[1], cell[2])) {
+            return {t, std::min(t_cross[axis], hi)};
+        }
+        t = t_cross[axis];
+        if (!(t <= hi)) {
+            return {none, none};
+        }
+        cell[axis] += step[axis];
+        if (cell[axis] < 0 || cell[axis] >= dims_[axis]) {
+            return {none, none};
+        }
+        t_cross[axis] += t_delta[axis];
+    }
+}
+
 VoxelMask VoxelMask::pooled(int factor) const {
     if (bits_.empty() || factor <= 1) {
         return *this;
@@ -999,6 +1063,36 @@ void SeenUnion::add(const SeenVoxels* seen) {
     } else {
         sparse_.merge(*seen);
     }
+}
+
+double SeenUnion::first_unknown_t(const Ray& ray, double t_from, double t_to,
+                                  const VoxelMask& surfaces) const {
+    constexpr double none = std::numeric_limits<double>::infinity();
+    if (everywhere_ || !is_dense_) {
+        return none;
+    }
+    double t = t_from;
+    while (t <= t_to) {
+        const auto [enter, leave] = dense_.first_unset_span(ray, t, t_to);
+        if (enter == none) {
+            return none;
+        }
+        // A stretch shorter than a quarter voxel (a corner clipped) is not judged: its middle
+        // would lie at the voxel's face, where rounding decides.
+        const double middle = 0.5 * (enter + leave);
+        const glm::dvec3 point = ray.at(middle);
+        if ((leave - enter) * glm::length(ray.direction) > 0.25 * dense_.voxel() &&
+            !sparse_.beyond_exact_region(point) && !surfaces.contains(point)) {
+            return middle;
+        }
+        // On past this voxel: a hair past its exit, so that rounding cannot find it again.
+        const double next = leave + 1e-9 * (1.0 + std::abs(leave));
+        if (!(next > t)) {
+            return none;
+        }
+        t = next;
+    }
+    return none;
 }
 
 void SeenUnion::densify(std::size_t max_bytes) {

@@ -158,7 +158,10 @@ struct FieldQuery {
             return false; // a ray one of the first probes answers never pays for the walk below
         }
         if (std::isnan(last_surface_t)) {
-            last_surface_t = known->last_surface_t(ray, ray.t_min, ray.t_max);
+            // Past the first point no probe saw and no surface holds, none can answer either:
+            // the last surface voxel before it bounds where a later probe can meet one.
+            last_surface_t = known->last_surface_t(
+                ray, ray.t_min, std::min(ray.t_max, field.first_unknown_t(ray, ray.t_min, *known)));
         }
         return result.free_until > last_surface_t;
     }
@@ -387,6 +390,12 @@ bool ProbeField::passes_over(std::size_t i, const Ray& ray, const TraceSettings&
 bool ProbeField::seen_by_any(const glm::dvec3& point) const {
     build_seen_unions();
     return known_space_masks_->any.contains(point);
+}
+
+double ProbeField::first_unknown_t(const Ray& ray, double t_from,
+                                   const KnownSpaceMask& known) const {
+    build_seen_unions();
+    return known_space_masks_->any.first_unknown_t(ray, t_from, ray.t_max, known.surfaces);
 }
 
 bool ProbeField::seen_by_corners(const GridCell& cell, const glm::dvec3& point) const {

@@ -56,6 +56,18 @@ std::vector<ProbeMap> partial_grid_probes(const BoxRoomScene& room, const ProbeP
     return probes;
 }
 
+// Whether `p` lies in the mask's box.
+bool inside_box(const VoxelMask& mask, const glm::dvec3& p) {
+    const glm::dvec3 origin = mask.origin();
+    for (int a = 0; a < 3; ++a) {
+        const double u = (p[a] - origin[a]) / mask.voxel();
+        if (!(u >= 0.0 && u < static_cast<double>(mask.dims()[static_cast<std::size_t>(a)]))) {
+            return false;
+        }
+    }
+    return true;
+}
+
 } // namespace
 
 // A row's run set a word at a time sets exactly the voxels one at a time would, across word
@@ -263,6 +275,66 @@ TEST(KnownSpace, AFileWithoutTheProbesDirectionsStillReads) {
     ASSERT_NE(old.seen_by(1), nullptr);
     EXPECT_TRUE(*old.seen_by(1) == *space.seen_by(1));
     EXPECT_EQ(old.surface_voxel_count(), space.surface_voxel_count());
+}
+
+// The walk that bounds where any probe can answer (SeenUnion::first_unknown_t): the point it
+// returns lies outside what the probe saw free and outside every surface voxel (so no probe can
+// answer past it), the forward voxel walk it uses finds the first unset voxel the samples meet,
+// and rays into the half of the room the probe never saw are bounded.
+TEST(KnownSpace, TheUnknownWalkStopsOnlyOutsideWhatWasSeenAndEverySurface) {
+    const BoxRoomScene room = BoxRoomScene{};
+    const glm::dvec3 centre(0.3, -0.2, 1.1);
+    const ProbeMap map = partial_probe(room, centre, 128);
+    KnownSpace space;
+    space.add_probe(map, 0);
+    const KnownSpaceMask mask = space.mask(0.02, 4.0);
+    const SeenVoxels seen(map);
+    SeenUnion seen_union;
+    seen_union.add(&seen);
+    seen_union.densify(std::size_t{32} << 20);
+    const VoxelMask dense = seen.dense(std::size_t{32} << 20);
+    ASSERT_GT(dense.set_count(), 0u);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    int bounded = 0;
+    int bounded_into_the_unseen_half = 0;
+    for (int i = 0; i < 2000; ++i) {
+        Ray ray;
+        ray.origin = centre + glm::dvec3(0.5 * u(rng), 0.5 * u(rng), 0.3 * u(rng));
+        ray.direction = glm::normalize(glm::dvec3(u(rng), u(rng), u(rng)));
+        ray.t_min = 0.01;
+        ray.t_max = 20.0;
+        const auto [enter, leave] = dense.first_unset_span(ray, ray.t_min, ray.t_max);
+        double sampled = std::numeric_limits<double>::infinity();
+        for (double t = ray.t_min; t <= ray.t_max && std::isinf(sampled); t += 0.002) {
+            const glm::dvec3 p = ray.at(t);
+            if (!dense.contains(p) && inside_box(dense, p)) {
+                sampled = t;
+            }
+        }
+        // Never after an unset voxel the samples met, and where it found one, it is unset.
+        EXPECT_LE(enter, sampled + 1e-9) << i;
+        if (!std::isinf(enter)) {
+            EXPECT_FALSE(dense.contains(ray.at(0.5 * (enter + leave)))) << i;
+        }
+        const double bound = seen_union.first_unknown_t(ray, ray.t_min, ray.t_max, mask.surfaces);
+        if (std::isinf(bound)) {
+            continue;
+        }
+        ++bounded;
+        // Into the half the probe never saw: bounded before the wall the ray would meet.
+        const double wall = room.distance(glm::vec3(ray.origin), glm::vec3(ray.direction));
+        if (ray.direction.x < -0.7 && bound < wall - 0.2) {
+            ++bounded_into_the_unseen_half;
+        }
+        const glm::dvec3 p = ray.at(bound);
+        EXPECT_FALSE(seen.contains(p)) << i;
+        EXPECT_FALSE(mask.surfaces.contains(p)) << i;
+        EXPECT_GE(bound, ray.t_min) << i;
+    }
+    std::printf("%d of 2000 rays bounded, %d heading into the unseen half before its wall\n",
+                bounded, bounded_into_the_unseen_half);
+    EXPECT_GT(bounded_into_the_unseen_half, 100);
 }
 
 TEST(Grid, RaysNoProbeCanAnswerStopEarlyWithTheAnswersOfAskingOn) {

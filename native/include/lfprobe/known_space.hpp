@@ -49,6 +49,10 @@ public:
     // or {-inf, -inf}.
     [[nodiscard]] std::pair<double, double> last_set_span(const Ray& ray, double t_from,
                                                           double t_to) const;
+    // The first stretch of [t_from, t_to] inside the mask's box where the ray is in an unset
+    // voxel: {t_enter, t_leave}, or {+inf, +inf} when it meets none there.
+    [[nodiscard]] std::pair<double, double> first_unset_span(const Ray& ray, double t_from,
+                                                             double t_to) const;
     // A mask `factor` times coarser whose voxel is set where any of its voxels is.
     [[nodiscard]] VoxelMask pooled(int factor) const;
     // Whether the voxel holding `point` is set (false outside the box). Inline, as is_set: a
@@ -87,6 +91,7 @@ public:
     }
     [[nodiscard]] const std::array<int, 3>& dims() const { return dims_; }
     [[nodiscard]] double voxel() const { return voxel_; }
+    [[nodiscard]] const glm::dvec3& origin() const { return origin_; }
     [[nodiscard]] std::size_t set_count() const;
     [[nodiscard]] std::size_t memory_bytes() const { return bits_.size() * sizeof(std::uint64_t); }
 
@@ -169,6 +174,14 @@ public:
     void add(const SeenVoxels* seen);
     // Turns the union dense where its box takes at most `max_bytes`.
     void densify(std::size_t max_bytes);
+    // The first t in [t_from, t_to] found outside both the union and `surfaces`, +inf when none
+    // is (or the union is not held densely). Every point of the ray before a probe's HIT or
+    // fallback meeting lies in one of the two (known_space.hpp), so no probe can answer past
+    // it. Each voxel of the union the ray crosses unset is judged at the middle of the ray's
+    // stretch in it: a point that lies outside both proves the ray leaves what is known, and a
+    // stretch judged covered only lets the bound fall later (never wrongly early).
+    [[nodiscard]] double first_unknown_t(const Ray& ray, double t_from, double t_to,
+                                         const VoxelMask& surfaces) const;
     [[nodiscard]] bool contains(const glm::dvec3& point) const {
         return everywhere_ ||
                (is_dense_ ? dense_.contains(point) || sparse_.beyond_exact_region(point)

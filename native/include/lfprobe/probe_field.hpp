@@ -166,6 +166,11 @@ public:
     // The same for any probe of the set, and for any corner probe of a grid cell.
     [[nodiscard]] bool seen_by_any(const glm::dvec3& point) const;
     [[nodiscard]] bool seen_by_corners(const GridCell& cell, const glm::dvec3& point) const;
+    // Where the ray (local frame), from t_from on, first reaches a point that no probe saw
+    // free and no surface of `known` holds: no probe can answer past it (SeenUnion's
+    // first_unknown_t). +inf where the known space cannot tell.
+    [[nodiscard]] double first_unknown_t(const Ray& ray, double t_from,
+                                         const KnownSpaceMask& known) const;
     // Maps and coarse levels of every probe in memory, and their prefiltered radiance once a
     // render with the footprint filter has built it.
     [[nodiscard]] std::size_t memory_bytes() const;
