@@ -103,6 +103,9 @@ py::dict image_dict(RenderedImage&& image, const std::string& metadata) {
     d["status"] = copy(image.status, {h, w});
     d["probe"] = copy(image.probe, {h, w});
     d["steps"] = copy(image.steps, {h, w});
+    if (!image.guessed.empty()) {
+        d["guessed"] = copy(image.guessed, {h, w});
+    }
     d["metadata"] = metadata;
     return d;
 }

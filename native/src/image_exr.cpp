@@ -29,7 +29,8 @@ struct Planes {
     std::vector<float> status;
     std::vector<float> probe;
     std::vector<float> steps;
-    std::vector<float> object; // empty when the image has no object channel
+    std::vector<float> object;  // empty when the image has no object channel
+    std::vector<float> guessed; // empty when the image has no guessed channel
 };
 
 // The analysis channels, written as a pass name and a one-letter channel ("status.X"): Blender's
@@ -45,6 +46,7 @@ constexpr AnalysisChannel kStatus{"status.X", "status"};
 constexpr AnalysisChannel kProbe{"probe.X", "probe"};
 constexpr AnalysisChannel kSteps{"steps.X", "steps"};
 constexpr AnalysisChannel kObject{"object.X", "object"};
+constexpr AnalysisChannel kGuessed{"guessed.X", "guessed.X"}; // no older name
 
 // The names of the analysis channels in one file.
 struct AnalysisNames {
@@ -52,6 +54,7 @@ struct AnalysisNames {
     const char* probe = kProbe.name;
     const char* steps = kSteps.name;
     const char* object = kObject.name;
+    const char* guessed = kGuessed.name;
 };
 
 // The name `channel` has in `header`: the current one, else the older one; nullptr for neither.
@@ -85,6 +88,9 @@ Imf::FrameBuffer frame_buffer(RenderedImage& image, Planes& planes, const Analys
     interleaved(names.steps, planes.steps.data(), 1);
     if (!planes.object.empty()) {
         interleaved(names.object, planes.object.data(), 1);
+    }
+    if (!planes.guessed.empty()) {
+        interleaved(names.guessed, planes.guessed.data(), 1);
     }
     return fb;
 }
@@ -132,6 +138,12 @@ void write_rendered_exr(const std::string& path, const RenderedImage& image,
             planes.object[i] = static_cast<float>(image.object[i]);
         }
     }
+    if (!image.guessed.empty()) {
+        if (image.guessed.size() != n) {
+            throw InputError(path + ": the guessed channel does not match the image size");
+        }
+        planes.guessed.assign(image.guessed.begin(), image.guessed.end());
+    }
     Imf::Header header(image.width, image.height);
     header.compression() = Imf::ZIP_COMPRESSION;
     const AnalysisNames names;
@@ -143,6 +155,9 @@ void write_rendered_exr(const std::string& path, const RenderedImage& image,
     }
     if (!planes.object.empty()) {
         header.channels().insert(names.object, Imf::Channel(Imf::FLOAT));
+    }
+    if (!planes.guessed.empty()) {
+        header.channels().insert(names.guessed, Imf::Channel(Imf::FLOAT));
     }
     header.insert(kFormatAttribute, Imf::StringAttribute(kFormatValue));
     if (!metadata.empty()) {
@@ -198,6 +213,7 @@ RenderedImage read_rendered_exr(const std::string& path, std::string* metadata) 
         names.probe = require(kProbe);
         names.steps = require(kSteps);
         names.object = find_analysis_channel(file.header(), kObject);
+        names.guessed = find_analysis_channel(file.header(), kGuessed);
         if (metadata != nullptr) {
             const auto* attr =
                 file.header().findTypedAttribute<Imf::StringAttribute>(kMetadataAttribute);
@@ -210,6 +226,9 @@ RenderedImage read_rendered_exr(const std::string& path, std::string* metadata) 
         planes.steps.resize(image.pixel_count());
         if (names.object != nullptr) {
             planes.object.resize(image.pixel_count());
+        }
+        if (names.guessed != nullptr) {
+            planes.guessed.resize(image.pixel_count());
         }
         file.setFrameBuffer(frame_buffer(image, planes, names));
         file.readPixels(0, h - 1);
@@ -235,6 +254,9 @@ RenderedImage read_rendered_exr(const std::string& path, std::string* metadata) 
         for (const float o : planes.object) {
             image.object.push_back(
                 static_cast<std::int32_t>(whole(o, -1.0, kIndexMax, names.object)));
+        }
+        for (const float g : planes.guessed) {
+            image.guessed.push_back(static_cast<std::uint8_t>(whole(g, 0.0, 1.0, names.guessed)));
         }
         return image;
     } catch (const InputError&) {

@@ -371,6 +371,7 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
     // it cannot answer (UNKNOWN texels) go through the whole field.
     const ViewTracer tracer(field, camera, with_sample_angle(settings, camera, n));
     RenderedImage image(camera.width, camera.height);
+    image.guessed.assign(image.pixel_count(), 0);
     // Probe traces per pixel, summed after the parallel loop (no shared counters).
     std::vector<std::uint32_t> probes_tried(image.pixel_count(), 0);
     // The share of each pixel's samples that ended UNKNOWN: what the hole fill colours.
@@ -403,6 +404,12 @@ RenderedImage render_probe_view(const ProbeField& field, const Camera& camera,
                         const FieldTraceResult& hit = hits[static_cast<std::size_t>(k)];
                         const std::size_t i = image.index(x0 + k, y);
                         set_centre(image, i, hit);
+                        image.guessed[i] =
+                            hit.status == TraceStatus::Hit && hit.probe >= 0 &&
+                                    field.is_inferred(static_cast<std::size_t>(hit.probe),
+                                                      hit.texel)
+                                ? 1
+                                : 0;
                         probes_tried[i] = hit.probes_tried;
                         if (n == 1) {
                             if (hit.status == TraceStatus::Hit) {

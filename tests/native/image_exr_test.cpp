@@ -42,6 +42,7 @@ RenderedImage varied_image() {
         image.probe[i] = static_cast<std::int32_t>(i) - 1;
         image.steps[i] = static_cast<std::uint32_t>(1000 * i);
         image.object.push_back(static_cast<std::int32_t>(i % 4) - 1);
+        image.guessed.push_back(static_cast<std::uint8_t>(i % 2));
     }
     return image;
 }
@@ -81,6 +82,7 @@ void expect_same(const RenderedImage& a, const RenderedImage& b) {
     EXPECT_EQ(a.probe, b.probe);
     EXPECT_EQ(a.steps, b.steps);
     EXPECT_EQ(a.object, b.object);
+    EXPECT_EQ(a.guessed, b.guessed);
 }
 
 TEST(RenderedImageExr, AnalysisChannelsAreWrittenAsPassesBlenderReads) {
@@ -88,8 +90,9 @@ TEST(RenderedImageExr, AnalysisChannelsAreWrittenAsPassesBlenderReads) {
     const std::string path = temporary_exr("lfprobe_image_exr");
     write_rendered_exr(path, image);
     const std::set<std::string> names = channel_names(path);
-    EXPECT_EQ(names, (std::set<std::string>{"R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z",
-                                            "status.X", "probe.X", "steps.X", "object.X"}));
+    EXPECT_EQ(names,
+              (std::set<std::string>{"R", "G", "B", "A", "Z", "N.X", "N.Y", "N.Z", "status.X",
+                                     "probe.X", "steps.X", "object.X", "guessed.X"}));
     // Blender's multilayer reader takes the last '.' token as the channel id and accepts only
     // one letter there (or red, green, blue, alpha).
     for (const std::string& name : names) {
@@ -103,13 +106,19 @@ TEST(RenderedImageExr, AnalysisChannelsAreWrittenAsPassesBlenderReads) {
     write_rendered_exr(path, traced);
     EXPECT_EQ(channel_names(path).count("object.X"), 0u);
     EXPECT_TRUE(read_rendered_exr(path).object.empty());
+    // Without a guessed channel (ground truth, splats) none is written or read back.
+    traced.guessed.clear();
+    write_rendered_exr(path, traced);
+    EXPECT_EQ(channel_names(path).count("guessed.X"), 0u);
+    EXPECT_TRUE(read_rendered_exr(path).guessed.empty());
     std::filesystem::remove(path);
 }
 
 TEST(RenderedImageExr, FilesWithTheOlderSingleTokenNamesStillRead) {
     // The channels as lfprobe wrote them before status.X and its kind: status, probe, steps,
     // object.
-    const RenderedImage image = varied_image();
+    RenderedImage image = varied_image();
+    image.guessed.clear(); // a channel added after the renaming: never under an older name
     const int w = image.width;
     const int h = image.height;
     const std::size_t n = image.pixel_count();

@@ -124,5 +124,40 @@ TEST(InferredTexels, AnEyeAtTheGuessingProbeKeepsItsOwnLookup) {
     EXPECT_GT(guessed_pixels(preferred), preferred.pixel_count() / 4);
 }
 
+// The render's guessed channel marks exactly the pixels a guess answers: with the nearest texel
+// and no blending, those whose colour is the guess's; where another probe measured the point
+// (prefer_measured), none.
+TEST(InferredTexels, TheGuessedChannelMarksThePixelsAGuessAnswers) {
+    const TwoProbes setup;
+    const Camera camera = Camera::look_at(setup.a, setup.wall_point, 48, 32, 30.0);
+    for (const bool b_knows : {false, true}) {
+        const ProbeField field = setup.field(b_knows);
+        const RenderedImage at_a = render_probe_view(field, camera, first_hit(true));
+        ASSERT_EQ(at_a.guessed.size(), at_a.pixel_count());
+        std::size_t marked = 0;
+        for (std::size_t i = 0; i < at_a.pixel_count(); ++i) {
+            const bool guess_colour = at_a.status[i] == 1 && at_a.rgba[4 * i] == 1.0f &&
+                                      at_a.rgba[4 * i + 1] == 0.0f && at_a.rgba[4 * i + 2] == 1.0f;
+            EXPECT_EQ(at_a.guessed[i], guess_colour ? 1 : 0) << i;
+            marked += at_a.guessed[i];
+        }
+        EXPECT_GT(marked, at_a.pixel_count() / 4);
+    }
+    // An eye beside probe a, off its centre: where b measured the wall, b answers and nothing
+    // is a guess; where b never saw it, a's guesses answer and are marked.
+    const Camera beside =
+        Camera::look_at(setup.a + glm::dvec3(0.1, 0.05, 0.0), setup.wall_point, 48, 32, 30.0);
+    const RenderedImage measured = render_probe_view(setup.field(true), beside, first_hit(true));
+    const RenderedImage guessed = render_probe_view(setup.field(false), beside, first_hit(true));
+    std::size_t measured_marks = 0;
+    std::size_t guessed_marks = 0;
+    for (std::size_t i = 0; i < measured.pixel_count(); ++i) {
+        measured_marks += measured.guessed[i];
+        guessed_marks += guessed.guessed[i];
+    }
+    EXPECT_EQ(measured_marks, 0u);
+    EXPECT_GT(guessed_marks, guessed.pixel_count() / 4);
+}
+
 } // namespace
 } // namespace lfprobe

@@ -113,6 +113,11 @@ def test_distance_walk_peers_and_stability_are_measured(tiny_report):
     assert min(r["distance_to_nearest_probe"] for r in distances) == 0.0
     assert max(r["distance_to_nearest_probe"] for r in distances) > 0.5
     assert len(data["walk"]) == 4
+    # Every probe render measures its guessed surfaces; a mesh-baked probe guesses nothing.
+    for r in distances:
+        assert 0.0 <= r["guessed_pixels"] <= 1.0 and 0.0 <= r["guessed_error_share"] <= 1.0
+        if r["source"] == "mesh":
+            assert r["guessed_pixels"] == 0.0 and r["psnr_off_guesses"] == pytest.approx(r["psnr"])
     methods = {r["method"].split(" (")[0] for r in data["peers"]["rows"]}
     assert methods == {"probes", "splats", "Poisson mesh"}, data["peers"]["poisson"]
     poisson = data["peers"]["poisson"]
@@ -286,6 +291,28 @@ def test_silhouette_pixels_are_those_beside_a_depth_step_and_carry_their_share_o
     test["rgba"][0, 3, :3] = 0.5  # an error at a silhouette pixel
     test["rgba"][2, 1, :3] = 0.5  # and the same error away from one
     assert error_share(reference, test, mask) == pytest.approx(0.5)
+
+
+def test_guessed_figures_are_the_share_of_pixels_on_guesses_their_error_and_the_psnr_without_them():
+    import numpy as np
+
+    from lfprobe.core.report.measure import guessed_figures
+
+    status = np.full((4, 6), metrics.STATUS_HIT, np.uint8)
+    reference = {"rgba": np.zeros((4, 6, 4), np.float32), "status": status, "width": 6, "height": 4}
+    test = {"rgba": np.zeros((4, 6, 4), np.float32), "status": status, "width": 6, "height": 4,
+            "guessed": np.zeros((4, 6), np.uint8)}
+    test["guessed"][1, 2:5] = 1  # three guessed pixels
+    test["rgba"][1, 2, :3] = 0.5  # an error on a guess
+    test["rgba"][3, 0, :3] = 0.5  # and the same error elsewhere
+    figures = guessed_figures(reference, test)
+    assert figures["guessed_pixels"] == pytest.approx(3 / 24)
+    assert figures["guessed_error_share"] == pytest.approx(0.5)
+    assert figures["psnr_off_guesses"] == pytest.approx(metrics.psnr_over(
+        reference["rgba"][..., :3], test["rgba"][..., :3], test["guessed"] == 0))
+    # Images without the channel (splats, meshes, older files) have no such figures.
+    del test["guessed"]
+    assert guessed_figures(reference, test) == {}
 
 
 def test_mesh_probe_from_its_own_centre_reproduces_ground_truth_up_to_its_resolution(native, scene_path, tmp_path):

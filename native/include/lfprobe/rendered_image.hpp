@@ -22,6 +22,10 @@ struct RenderedImage {
     // Optional: the mesh object seen (ground truth), -1 none. Empty = no "object.X" channel; the
     // reader fills it only when the file has one.
     std::vector<std::int32_t> object;
+    // Optional: probe traces, 1 where the pixel's centre sample HIT a hole-filled texel (a
+    // surface no scan saw there, guessed from around it: TexelState::Inferred), else 0. Empty
+    // = no "guessed.X" channel. Compact storage keeps no confidence: all 0 there.
+    std::vector<std::uint8_t> guessed;
 
     RenderedImage() = default;
     // Every pixel a MISS: colour and coverage 0, Z +inf, normal 0, probe -1, steps 0.

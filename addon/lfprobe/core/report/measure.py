@@ -185,6 +185,20 @@ def error_share(reference: dict, test: dict, mask: np.ndarray) -> float:
     return float(squared[mask].sum()) / total if total > 0 else 0.0
 
 
+def guessed_figures(reference: dict, test: dict) -> Dict[str, object]:
+    """Where a probe render shows a guess (its "guessed" channel: the centre sample HIT a
+    hole-filled texel, a surface no scan saw there): the share of the pixels, the share of the
+    squared error they carry, and the PSNR over the other pixels. Empty for images without the
+    channel (splats, meshes, files from before it)."""
+    if "guessed" not in test:
+        return {}
+    guessed = np.asarray(test["guessed"]).reshape(int(test["height"]), int(test["width"])) != 0
+    return {"guessed_pixels": float(guessed.mean()),
+            "guessed_error_share": error_share(reference, test, guessed),
+            "psnr_off_guesses": metrics.psnr_over(metrics.visible_colour(reference),
+                                                  metrics.visible_colour(test), ~guessed)}
+
+
 def timing(stats: dict, pixels: int) -> Dict[str, float]:
     """Frame time, rays per second (every ray traced, samples included, where the stats count
     them) and pixels per second."""

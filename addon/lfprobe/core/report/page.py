@@ -128,7 +128,10 @@ def _distance_section(page, data: Dict[str, object], img, findings) -> None:
                    "(the point farthest from every probe), keeping the viewing direction. Mesh-baked probes isolate "
                    "the tracing error; scan-baked probes add the scan's. Crosses: the scene's walk. What the eye sees "
                    "changes as it moves, so each eye also gets a control: a mesh-baked probe of the same resolution "
-                   "placed at the eye itself; the PSNR loss against it is the error due to the distance.", "note")
+                   "placed at the eye itself; the PSNR loss against it is the error due to the distance. 'on guesses': "
+                   "the pixels whose centre sample met a hole-filled texel (a surface no scan saw from where the "
+                   "stations stood, guessed from the surfaces around it); 'their error': their share of the squared "
+                   "error; 'PSNR dB off guesses': the PSNR over the other pixels.", "note")
     img("distance_psnr.png", "PSNR [dB] against distance to the nearest probe [m]", 560)
     img("distance_flip.png", "FLIP against distance to the nearest probe [m]", 560)
     img("distance_psnr_loss.png", "PSNR loss [dB] against a mesh-baked probe of the same resolution at the eye, "
@@ -140,7 +143,10 @@ def _distance_section(page, data: Dict[str, object], img, findings) -> None:
                                       ("ms_per_frame", "ms/frame", num(".2f")),
                                       ("texels_per_ray", "texels/ray", num(".1f")), *METRIC_COLUMNS,
                                       ("psnr_probe_at_eye", "PSNR dB, probe at eye", num(".2f")),
-                                      ("psnr_loss", "PSNR loss dB", num(".2f"))]))
+                                      ("psnr_loss", "PSNR loss dB", num(".2f")),
+                                      ("guessed_pixels", "on guesses", num(".2%")),
+                                      ("guessed_error_share", "their error", num(".0%")),
+                                      ("psnr_off_guesses", "PSNR dB off guesses", num(".2f"))]))
     if data["walk"]:
         page.add("<h3>Walk</h3>")
         page.add(table(data["walk"], [("frame", "frame", text), ("distance_to_nearest_probe", "distance m", num(".3f")),

@@ -166,12 +166,22 @@ def _findings(data: Dict[str, object], reference: Optional[Dict[str, object]]) -
         loss = _series_trend(rows, "distance_to_nearest_probe", "psnr_loss")
         if len(pts) >= 2:
             worst = max(loss, key=lambda p: p[1]) if loss else None
-            f["distance"].append(
+            sentence = (
                 f"{source.capitalize()}-baked probes, view '{view}': PSNR {pts[0][1]:.2f} dB with the eye "
                 f"{pts[0][0]:.3f} m from the nearest probe, {pts[-1][1]:.2f} dB at {pts[-1][0]:.3f} m; "
                 + (f"against a probe at the eye itself the loss is {loss[0][1]:.2f} dB at {loss[0][0]:.3f} m and "
                    f"{loss[-1][1]:.2f} dB at {loss[-1][0]:.3f} m (largest {worst[1]:.2f} dB at {worst[0]:.3f} m)."
                    if loss else "no control figures."))
+            guesses = [r for r in sorted(rows, key=lambda r: r["distance_to_nearest_probe"])
+                       if r.get("guessed_pixels") and r.get("psnr_off_guesses") is not None]
+            if guesses:
+                sentence += (" Pixels showing guessed surfaces (hole-filled texels: what no scan saw from "
+                             "where the stations stood), their share of the squared error, and the PSNR "
+                             "over the other pixels: " + "; ".join(
+                                 f"{100 * r['guessed_pixels']:.2f} %, {100 * r['guessed_error_share']:.0f} %, "
+                                 f"{r['psnr_off_guesses']:.2f} dB at {r['distance_to_nearest_probe']:.3f} m"
+                                 for r in guesses) + ".")
+            f["distance"].append(sentence)
     series: Dict[str, List[Dict[str, object]]] = {}
     for r in data["sweep"]:
         if r["trace"] == DEFAULT_TRACE[0] and r["counts"] == data["scene"]["grid"]["counts"]:

@@ -17,8 +17,8 @@ import numpy as np
 from .. import pipeline
 from ..pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh
 from ..embree_rates import embree_rates
-from .measure import (RunContext, error_share, measure, nearest_probe_distance, pixel_count, psnr_only,
-                      silhouette_pixels, timing)
+from .measure import (RunContext, error_share, guessed_figures, measure, nearest_probe_distance, pixel_count,
+                      psnr_only, silhouette_pixels, timing)
 from .presets import BAKE_VARIANTS, COMPACT_TRACE, DEFAULT_TRACE, LOAD_KEYS
 from .scene import grid_positions
 
@@ -248,6 +248,7 @@ class Sweep:
                     row.update(timing(stats, pixel_count(camera)))
                     row.update({"texels_per_ray": stats["mean_steps"], "probes_per_ray": stats["mean_probes"]})
                     row.update(figures)
+                    row.update(guessed_figures(gt, image))
                     self.view_rows.append(row)
                     if trace_label == DEFAULT_TRACE[0] and (is_reference or is_mesh_reference):
                         target = self.reference_images if is_reference else self.mesh_triplets
@@ -319,7 +320,7 @@ class Sweep:
                        "fraction_to_cell_centre": fraction, "eye": eye,
                        "distance_to_nearest_probe": nearest_probe_distance(eye, positions),
                        **timing(stats, pixel_count(camera)), "texels_per_ray": stats["mean_steps"], **figures,
-                       "psnr_probe_at_eye": control,
+                       **guessed_figures(gt, image), "psnr_probe_at_eye": control,
                        "psnr_loss": control - figures["psnr"] if math.isfinite(control) and math.isfinite(figures["psnr"]) else None}
                 self.distance_rows.append(row)
         ctx.log(f"  error against distance from the nearest probe ({source} probes): "
