@@ -63,6 +63,7 @@ def test_f12_matches_the_cli_render_of_the_same_camera():
     assert np.array_equal(passes["LFP Status.X"], cli["status"].astype(np.float32))
     assert np.array_equal(passes["LFP Probe.X"], cli["probe"].astype(np.float32))
     assert np.array_equal(passes["LFP Steps.X"], cli["steps"].astype(np.float32))
+    assert np.array_equal(passes["LFP Guessed.X"], cli["guessed"].astype(np.float32))
 
 
 def test_grid_coarse_resolution_reaches_the_trace():

@@ -3,9 +3,10 @@ baked probe grid (never its geometry).
 
 F12 traces the active camera at the render size and writes Combined (RGBA: linear colour,
 coverage), Depth (distance along the ray, +inf where nothing is hit, as the native EXR's Z)
-and three trace passes: "LFP Status" (0 MISS, 1 HIT, 2 UNKNOWN), "LFP Probe" (the probe that
-answered, −1 none) and "LFP Steps" (texels visited). The image is the one `./lfprobe render`
-writes for the same camera JSON.
+and four trace passes: "LFP Status" (0 MISS, 1 HIT, 2 UNKNOWN), "LFP Probe" (the probe that
+answered, −1 none), "LFP Steps" (texels visited) and "LFP Guessed" (1 where the pixel shows a
+hole-filled texel: a surface no scan saw, guessed from around it; where a scan station would
+help). The image is the one `./lfprobe render` writes for the same camera JSON.
 
 The viewport refines progressively in a worker thread (viewport.py) and draws the latest
 level as a texture, sRGB-encoded here (the scene's view transform is not applied to it).
@@ -25,7 +26,8 @@ from ...core.errors import InputError
 from .. import probe_view
 from .viewport import ProgressiveView
 
-TRACE_PASSES = (("LFP Status", "status"), ("LFP Probe", "probe"), ("LFP Steps", "steps"))
+TRACE_PASSES = (("LFP Status", "status"), ("LFP Probe", "probe"), ("LFP Steps", "steps"),
+                ("LFP Guessed", "guessed"))
 
 
 def _to_bottom_up(array: np.ndarray, channels: int) -> np.ndarray:
