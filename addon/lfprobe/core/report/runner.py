@@ -173,8 +173,8 @@ def _findings(data: Dict[str, object], reference: Optional[Dict[str, object]]) -
                    f"{loss[-1][1]:.2f} dB at {loss[-1][0]:.3f} m (largest {worst[1]:.2f} dB at {worst[0]:.3f} m)."
                    if loss else "no control figures."))
             guesses = [r for r in sorted(rows, key=lambda r: r["distance_to_nearest_probe"])
-                       if r.get("guessed_pixels") and r.get("psnr_off_guesses") is not None]
-            if guesses:
+                       if r.get("guessed_pixels") is not None and r.get("psnr_off_guesses") is not None]
+            if any(r["guessed_pixels"] > 0 for r in guesses):
                 sentence += (" Pixels showing guessed surfaces (hole-filled texels: what no scan saw from "
                              "where the stations stood), their share of the squared error, and the PSNR "
                              "over the other pixels: " + "; ".join(
