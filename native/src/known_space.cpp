@@ -72,6 +72,72 @@ double VoxelMask::last_set_t(const Ray& ray, double t_from, double t_to) const {
     return last_set_span(ray, t_from, t_to).second;
 }
 
+namespace {
+
+// A walk through a box of voxels along a ray, from a voxel on forwards (t rising) or backwards:
+// the voxel it is in, and the t at which the ray crosses that voxel's face ahead on each axis
+// (±inf on an axis the ray runs parallel to).
+struct VoxelWalk {
+    std::array<int, 3> cell{};
+    std::array<int, 3> step{};
+    std::array<double, 3> t_cross{};
+    std::array<double, 3> t_delta{};
+    bool forward = true;
+
+    VoxelWalk(const Ray& ray, double t_start, bool forwards, const glm::dvec3& origin, double voxel,
+              const std::array<int, 3>& dims)
+        : forward(forwards) {
+        const glm::dvec3 p = ray.at(t_start);
+        for (int a = 0; a < 3; ++a) {
+            const auto k = static_cast<std::size_t>(a);
+            const double u = (p[a] - origin[a]) / voxel;
+            cell[k] = std::clamp(static_cast<int>(std::floor(u)), 0, dims[k] - 1);
+            const double d = ray.direction[a];
+            if (d == 0.0) {
+                step[k] = 0;
+                t_cross[k] = (forward ? 1.0 : -1.0) * std::numeric_limits<double>::infinity();
+                t_delta[k] = 0.0;
+                continue;
+            }
+            step[k] = (d > 0.0) == forward ? 1 : -1;
+            const int face = step[k] > 0 ? cell[k] + 1 : cell[k];
+            t_cross[k] = (origin[a] + voxel * face - ray.origin[a]) / d;
+            t_delta[k] = voxel / std::abs(d);
+        }
+    }
+    // The axis whose face the ray crosses next.
+    [[nodiscard]] std::size_t next_axis() const {
+        std::size_t axis = 0;
+        for (std::size_t k = 1; k < 3; ++k) {
+            if (forward ? t_cross[k] < t_cross[axis] : t_cross[k] > t_cross[axis]) {
+                axis = k;
+            }
+        }
+        return axis;
+    }
+    // Into the next voxel across `axis`; false where that leaves the box.
+    bool cross(std::size_t axis, const std::array<int, 3>& dims) {
+        cell[axis] += step[axis];
+        if (cell[axis] < 0 || cell[axis] >= dims[axis]) {
+            return false;
+        }
+        t_cross[axis] += forward ? t_delta[axis] : -t_delta[axis];
+        return true;
+    }
+};
+
+// Narrows [lo, hi] to the part of it inside a box of voxels (slabs); false when none is.
+bool clip_to_box(const Ray& ray, const glm::dvec3& origin, double voxel,
+                 const std::array<int, 3>& dims, double& lo, double& hi) {
+    for (int a = 0; a < 3; ++a) {
+        clip_to_slab(ray, a, origin[a], origin[a] + voxel * dims[static_cast<std::size_t>(a)], lo,
+                     hi);
+    }
+    return lo <= hi;
+}
+
+} // namespace
+
 std::pair<double, double> VoxelMask::first_unset_span(const Ray& ray, double t_from,
                                                       double t_to) const {
     constexpr double none = std::numeric_limits<double>::infinity();
@@ -80,59 +146,21 @@ std::pair<double, double> VoxelMask::first_unset_span(const Ray& ray, double t_f
     }
     double lo = t_from;
     double hi = t_to;
-    for (int a = 0; a < 3; ++a) {
-        clip_to_slab(ray, a, origin_[a], origin_[a] + voxel_ * dims_[static_cast<std::size_t>(a)],
-                     lo, hi);
-    }
-    if (!(lo <= hi) || !std::isfinite(lo)) {
+    if (!clip_to_box(ray, origin_, voxel_, dims_, lo, hi) || !std::isfinite(lo)) {
         return {none, none};
     }
     // Walk the voxels forwards from `lo` (the mirror of last_set_span's walk).
-    std::array<int, 3> cell{};
-    std::array<int, 3> step{};
-    std::array<double, 3> t_cross{}; // where the walk leaves the cell on each axis
-    std::array<double, 3> t_delta{};
-    const glm::dvec3 p = ray.at(lo);
-    for (int a = 0; a < 3; ++a) {
-        const auto k = static_cast<std::size_t>(a);
-        const double u = (p[a] - origin_[a]) / voxel_;
-        cell[k] = std::clamp(static_cast<int>(std::floor(u)), 0, dims_[k] - 1);
-        const double d = ray.direction[a];
-        if (d > 0.0) {
-            step[k] = 1;
-            t_cross[k] = (origin_[a] + voxel_ * (cell[k] + 1) - ray.origin[a]) / d;
-            t_delta[k] = voxel_ / d;
-        } else if (d < 0.0) {
-            step[k] = -1;
-            t_cross[k] = (origin_[a] + voxel_ * cell[k] - ray.origin[a]) / d;
-            t_delta[k] = -voxel_ / d;
-        } else {
-            step[k] = 0;
-            t_cross[k] = none;
-            t_delta[k] = 0.0;
-        }
-    }
+    VoxelWalk walk(ray, lo, true, origin_, voxel_, dims_);
     double t = lo;
     for (;;) {
-        std::size_t axis = 0;
-        if (t_cross[1] < t_cross[axis]) {
-            axis = 1;
+        const std::size_t axis = walk.next_axis();
+        if (!is_set(walk.cell[0], walk.cell[1], walk.cell[2])) {
+            return {t, std::min(walk.t_cross[axis], hi)};
         }
-        if (t_cross[2] < t_cross[axis]) {
-            axis = 2;
-        }
-        if (!is_set(cell[0], cell[1], cell[2])) {
-            return {t, std::min(t_cross[axis], hi)};
-        }
-        t = t_cross[axis];
-        if (!(t <= hi)) {
+        t = walk.t_cross[axis];
+        if (!(t <= hi) || !walk.cross(axis, dims_)) {
             return {none, none};
         }
-        cell[axis] += step[axis];
-        if (cell[axis] < 0 || cell[axis] >= dims_[axis]) {
-            return {none, none};
-        }
-        t_cross[axis] += t_delta[axis];
     }
 }
 
@@ -163,62 +191,23 @@ std::pair<double, double> VoxelMask::last_set_span(const Ray& ray, double t_from
     if (bits_.empty()) {
         return {none, none};
     }
-    // The part of [t_from, t_to] inside the mask's box (slabs).
     double lo = t_from;
     double hi = t_to;
-    for (int a = 0; a < 3; ++a) {
-        clip_to_slab(ray, a, origin_[a], origin_[a] + voxel_ * dims_[static_cast<std::size_t>(a)],
-                     lo, hi);
-    }
-    if (!(lo <= hi)) {
+    if (!clip_to_box(ray, origin_, voxel_, dims_, lo, hi)) {
         return {none, none};
     }
     // Walk the voxels backwards from `hi`: the first occupied one met is the last along the ray.
-    std::array<int, 3> cell{};
-    std::array<int, 3> step{};
-    std::array<double, 3> t_cross{}; // where the backward walk leaves the cell on each axis
-    std::array<double, 3> t_delta{};
-    const glm::dvec3 p = ray.at(hi);
-    for (int a = 0; a < 3; ++a) {
-        const auto k = static_cast<std::size_t>(a);
-        const double u = (p[a] - origin_[a]) / voxel_;
-        cell[k] = std::clamp(static_cast<int>(std::floor(u)), 0, dims_[k] - 1);
-        const double d = ray.direction[a];
-        if (d > 0.0) {
-            step[k] = -1; // going back lowers the coordinate
-            t_cross[k] = (origin_[a] + voxel_ * cell[k] - ray.origin[a]) / d;
-            t_delta[k] = voxel_ / d;
-        } else if (d < 0.0) {
-            step[k] = 1;
-            t_cross[k] = (origin_[a] + voxel_ * (cell[k] + 1) - ray.origin[a]) / d;
-            t_delta[k] = -voxel_ / d;
-        } else {
-            step[k] = 0;
-            t_cross[k] = none;
-            t_delta[k] = 0.0;
-        }
-    }
+    VoxelWalk walk(ray, hi, false, origin_, voxel_, dims_);
     double t = hi;
     for (;;) {
-        std::size_t axis = 0;
-        if (t_cross[1] > t_cross[axis]) {
-            axis = 1;
+        const std::size_t axis = walk.next_axis();
+        if (is_set(walk.cell[0], walk.cell[1], walk.cell[2])) {
+            return {std::max(walk.t_cross[axis], lo), t};
         }
-        if (t_cross[2] > t_cross[axis]) {
-            axis = 2;
-        }
-        if (is_set(cell[0], cell[1], cell[2])) {
-            return {std::max(t_cross[axis], lo), t};
-        }
-        t = t_cross[axis];
-        if (!(t >= lo)) {
+        t = walk.t_cross[axis];
+        if (!(t >= lo) || !walk.cross(axis, dims_)) {
             return {none, none};
         }
-        cell[axis] += step[axis];
-        if (cell[axis] < 0 || cell[axis] >= dims_[axis]) {
-            return {none, none};
-        }
-        t_cross[axis] -= t_delta[axis];
     }
 }
 
