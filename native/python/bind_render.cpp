@@ -36,6 +36,7 @@ py::dict render_stats_dict(const RenderStats& s) {
     d["probes_tried"] = s.probes_tried;
     d["holes_filled"] = s.holes_filled;
     d["holes_left"] = s.holes_left;
+    d["guessed"] = s.guessed;
     d["seconds"] = s.seconds;
     d["rays_per_second"] = s.rays_per_second();
     d["mean_steps"] = s.mean_steps();

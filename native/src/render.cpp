@@ -30,6 +30,7 @@ nlohmann::json RenderStats::to_json() const {
                           {"probes_tried", probes_tried},
                           {"holes_filled", holes_filled},
                           {"holes_left", holes_left},
+                          {"guessed", guessed},
                           {"seconds", seconds},
                           {"rays_per_second", rays_per_second()},
                           {"mean_steps", mean_steps()},
@@ -511,6 +512,7 @@ RenderStats stats_of(const RenderedImage& image) {
             break;
         }
         s.steps += image.steps[i];
+        s.guessed += image.guessed.empty() ? 0 : image.guessed[i];
     }
     return s;
 }

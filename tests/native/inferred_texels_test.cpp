@@ -132,7 +132,9 @@ TEST(InferredTexels, TheGuessedChannelMarksThePixelsAGuessAnswers) {
     const Camera camera = Camera::look_at(setup.a, setup.wall_point, 48, 32, 30.0);
     for (const bool b_knows : {false, true}) {
         const ProbeField field = setup.field(b_knows);
-        const RenderedImage at_a = render_probe_view(field, camera, first_hit(true));
+        RenderStats stats;
+        const RenderedImage at_a =
+            render_probe_view(field, camera, first_hit(true), nullptr, &stats);
         ASSERT_EQ(at_a.guessed.size(), at_a.pixel_count());
         std::size_t marked = 0;
         for (std::size_t i = 0; i < at_a.pixel_count(); ++i) {
@@ -142,6 +144,7 @@ TEST(InferredTexels, TheGuessedChannelMarksThePixelsAGuessAnswers) {
             marked += at_a.guessed[i];
         }
         EXPECT_GT(marked, at_a.pixel_count() / 4);
+        EXPECT_EQ(stats.guessed, marked); // the count the CLI and F12 report
     }
     // An eye beside probe a, off its centre: where b measured the wall, b answers and nothing
     // is a guess; where b never saw it, a's guesses answer and are marked.

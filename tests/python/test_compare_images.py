@@ -214,12 +214,18 @@ def test_lfprobe_against_lfprobe_gives_the_figures_it_always_gave(native, render
     for key, value in expected.items():
         assert figures[key] == value, key
     assert figures["counts"]["gt_hit"]["HIT"] > 0 and figures["depth_pixels"] > 0
+    # A probe render as the test also gives its guessed surfaces (compare's own additions).
+    guessed = metrics.guessed_figures(reference, test)
+    assert set(guessed) == {"guessed_pixels", "guessed_error_share", "psnr_off_guesses"}
+    for key, value in guessed.items():
+        assert figures[key] == pytest.approx(value), key
     assert set(figures) - set(expected) == {"compare_seconds", "computed", "not_computed", "reference_source",
-                                            "test_source"}
+                                            "test_source", *guessed}
     assert figures["not_computed"] == {}
     assert figures["computed"] == ["psnr", "ssim", "flip", "psnr_answered", *metrics.GEOMETRY_METRICS]
     table = run_cli("compare", ref_path, test_path, check=True).stdout
     assert "confusion     test HIT" in table and "not computed" not in table
+    assert f"{guessed['guessed_pixels']:.2%} of the pixels" in table
 
 
 def test_renders_with_the_older_channel_names_read_as_before(native, renders, tmp_path):

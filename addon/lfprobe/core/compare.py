@@ -80,6 +80,7 @@ def measure(reference: dict, test: dict, ppd: float = DEFAULT_PPD) -> Tuple[Dict
         result, error_map = metrics.compare_images_with_map(reference, test, ppd=ppd)
     else:
         result, error_map = metrics.compare_colour_with_map(reference, test, ppd=ppd)
+    result.update(metrics.guessed_figures(reference, test))
     result["compare_seconds"] = time.perf_counter() - start
     result["computed"], result["not_computed"] = metrics.availability(reference, test, result["ssim"])
     return result, error_map

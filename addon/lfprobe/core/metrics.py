@@ -55,6 +55,10 @@ DEFINITIONS = {
                           "0 when there are none",
     "counts": "confusion counts: ground truth (hit, miss) × test (HIT, MISS, UNKNOWN); reference "
               "pixels that are themselves UNKNOWN are left out and counted in ref_unknown",
+    "guessed_pixels": "probe renders only: pixels whose centre sample met a hole-filled texel (a surface no "
+                      "scan saw there, guessed by the bake from around it) / all pixels",
+    "guessed_error_share": "probe renders only: the share of the squared sRGB error (as psnr) on those pixels",
+    "psnr_off_guesses": "probe renders only: PSNR as psnr over the other pixels; null when every pixel is a guess",
 }
 
 
@@ -190,6 +194,28 @@ def psnr_over(ref_rgb: np.ndarray, test_rgb: np.ndarray, mask: np.ndarray) -> Op
     if not mask.any():
         return None
     return psnr(np.asarray(ref_rgb)[mask], np.asarray(test_rgb)[mask])
+
+
+def error_share(reference: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
+                mask: np.ndarray) -> float:
+    """The fraction of the squared error (sRGB, as psnr) that the pixels of `mask` carry."""
+    squared = ((srgb_encode(visible_colour(reference)) - srgb_encode(visible_colour(test))) ** 2).sum(axis=-1)
+    total = float(squared.sum())
+    return float(squared[np.asarray(mask, dtype=bool)].sum()) / total if total > 0 else 0.0
+
+
+def guessed_figures(reference: Dict[str, np.ndarray], test: Dict[str, np.ndarray]) -> Dict[str, object]:
+    """Where a probe render shows a guess (its "guessed" plane: the centre sample HIT a
+    hole-filled texel, a surface no scan saw there): the share of the pixels
+    (guessed_pixels), the share of the squared error they carry (guessed_error_share) and the
+    PSNR over the other pixels (psnr_off_guesses, None when every pixel is a guess). Empty for
+    images without the plane (ground truth, splats, other files, renders from before it)."""
+    if "guessed" not in test:
+        return {}
+    guessed = np.asarray(test["guessed"]).reshape(np.asarray(test["rgba"]).shape[:2]) != 0
+    return {"guessed_pixels": float(guessed.mean()),
+            "guessed_error_share": error_share(reference, test, guessed),
+            "psnr_off_guesses": psnr_over(visible_colour(reference), visible_colour(test), ~guessed)}
 
 
 def wrong_surface_rate(ref_depth: np.ndarray, test_depth: np.ndarray, ref_hit: np.ndarray,

@@ -49,7 +49,8 @@ struct RenderStats {
     std::uint64_t probes_tried = 0; // probe traces over all rays
     std::uint64_t holes_filled = 0; // pixels with no HIT sample given a colour by the hole fill
     std::uint64_t holes_left = 0;   // such pixels in holes wider than the fill reaches
-    double seconds = 0.0;           // wall time of the trace (not of loading or writing)
+    std::uint64_t guessed = 0; // HIT pixels showing a hole-filled texel (RenderedImage::guessed)
+    double seconds = 0.0;      // wall time of the trace (not of loading or writing)
 
     [[nodiscard]] double rays_per_second() const {
         return seconds > 0.0 ? static_cast<double>(rays) / seconds : 0.0;

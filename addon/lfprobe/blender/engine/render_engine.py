@@ -120,7 +120,9 @@ class LFProbeRenderEngine(bpy.types.RenderEngine):
         estimates.record_render_rate(stats["rays_per_second"])  # the next F12's time estimate
         pixels = max(int(stats["hits"] + stats["misses"] + stats["unknown"]), 1)
         self.update_stats("", f"Light Field Probes: {stats['seconds'] * 1000:.0f} ms, "
-                              f"{stats['rays_per_second'] / 1e6:.2f} M rays/s, HIT {100 * stats['hits'] / pixels:.1f}%")
+                              f"{stats['rays_per_second'] / 1e6:.2f} M rays/s, HIT {100 * stats['hits'] / pixels:.1f}%"
+                              + (f" (guessed {100 * stats['guessed'] / pixels:.1f}%: see LFP Guessed)"
+                                 if stats.get("guessed") else ""))
         return image
 
     def _write_result(self, depsgraph, image) -> None:

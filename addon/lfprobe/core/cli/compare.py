@@ -61,6 +61,11 @@ def _print_table(ref_path: str, test_path: str, r: Dict[str, object]) -> None:
         reasons.setdefault(why, []).append(key)
     for why, keys in reasons.items():
         print(f"  not computed: {', '.join(keys)}: {why}")
+    if r.get("guessed_pixels") is not None:
+        off = r["psnr_off_guesses"]
+        print(f"  guessed surfaces (hole-filled texels, what no scan saw): {r['guessed_pixels']:.2%} of the "
+              f"pixels, {r['guessed_error_share']:.0%} of the squared error; PSNR over the other pixels "
+              f"{_fmt(off, '.2f', ' dB')}")
     for key in ("ref_render_seconds", "test_render_seconds"):
         if r.get(key) is not None:
             print(f"  {key.replace('_', ' ')}: {r[key] * 1000:.1f} ms")

@@ -227,6 +227,9 @@ def _cmd_render(args) -> int:
     print(f"  pixels HIT {100 * stats['hits'] / pixels:.2f}%, MISS {100 * stats['misses'] / pixels:.2f}%, "
           f"UNKNOWN {100 * stats['unknown'] / pixels:.2f}%; {stats['mean_steps']:.1f} texels and "
           f"{stats['mean_probes']:.2f} probes per ray")
+    if stats.get("guessed"):
+        print(f"  guessed: {100 * stats['guessed'] / pixels:.2f}% of the pixels show a hole-filled texel, a "
+              f"surface no scan saw (the image's guessed.X channel)")
     if stats.get("holes_filled") or stats.get("holes_left"):
         print(f"  hole fill: {stats['holes_filled']:,} pixels that no probe answered coloured from the pixels "
               f"around them, {stats['holes_left']:,} left black (in holes wider than the fill reaches)")
