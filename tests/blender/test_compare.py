@@ -44,6 +44,12 @@ def test_compare_writes_metrics_and_loads_the_images():
     assert report["hole_rate"] < 0.02 and report["false_hit_rate"] == 0.0
     assert report["reference_objects"] == ["Room"] and report["grid"] == "ProbeGrid"
     assert report["ref_render_seconds"] > 0 and report["test_render_seconds"] > 0
+    # The probe render's guessed surfaces are measured too, and named in the summary when any.
+    assert 0.0 <= report["guessed_pixels"] <= 1.0 and 0.0 <= report["guessed_error_share"] <= 1.0
+    compare_op = helpers.addon("blender.operators.compare")
+    assert ("guessed surfaces" in compare_op.summary_line(report)) == (report["guessed_pixels"] > 0)
+    assert "guessed surfaces 1.50% of the pixels (40% of the error)" in compare_op.summary_line(
+        {**report, "guessed_pixels": 0.015, "guessed_error_share": 0.4})
     for name in ("camera.json", "ground_truth.exr", "probes.exr", "error_flip.png"):
         assert os.path.isfile(os.path.join(out, name)), name
 

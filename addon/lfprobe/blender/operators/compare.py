@@ -95,9 +95,14 @@ def summary_line(result: dict) -> str:
         return "n/a" if value is None else f"{value:{spec}}{unit}"
 
     psnr = "inf" if result.get("psnr") == float("inf") else fmt("psnr", ".2f", " dB")
-    return (f"PSNR {psnr}, SSIM {fmt('ssim', '.4f')}, FLIP {fmt('flip', '.4f')}, "
+    line = (f"PSNR {psnr}, SSIM {fmt('ssim', '.4f')}, FLIP {fmt('flip', '.4f')}, "
             f"depth AbsRel {fmt('depth_absrel', '.4f')}, hole rate {fmt('hole_rate', '.3%')}, "
             f"false hits {fmt('false_hit_rate', '.3%')}")
+    if result.get("guessed_pixels"):
+        # Where no scan saw: the share of the view the probes guessed, and of the error there.
+        line += (f", guessed surfaces {fmt('guessed_pixels', '.2%')} of the pixels "
+                 f"({fmt('guessed_error_share', '.0%')} of the error)")
+    return line
 
 
 def load_report_images(paths: dict) -> list:
