@@ -149,7 +149,8 @@ std::vector<std::vector<std::uint32_t>> small_holes(const ProbeMap& map, int max
 // surface (a spread over kSilhouetteSpread) and whose far part is at least kMinFarBorder of
 // the border lies where the scans could not see behind the near surface (a scanner's shadow,
 // seen from elsewhere): what is there is the far surface, continued. A hole bordered mostly by
-// the near surface is a gap in that surface (a thin object's missing points): none (0).
+// the near surface is a gap in that surface (a thin object's missing points): minus the split
+// (the near surface is nearer than it); a hole on no silhouette: 0.
 float disocclusion_split(const ProbeMap& map, const std::vector<std::uint32_t>& hole,
                          std::vector<std::uint8_t>& in_border) {
     const int n = map.resolution;
@@ -177,7 +178,59 @@ float disocclusion_split(const ProbeMap& map, const std::vector<std::uint32_t>& 
         border.begin(), border.end(), [&](std::uint32_t u) { return map.distance[u] >= split; }));
     return static_cast<float>(far_count) >= kMinFarBorder * static_cast<float>(border.size())
                ? split
-               : 0.0f;
+               : -split;
+}
+
+// Whether a hole on a silhouette that its border calls a gap in the near surface lies within
+// one near surface: at least half its texels meet, both ways along a row or a column, texels
+// nearer than `split` whose distances agree within kSilhouetteSpread (the surface continues
+// across the hole). A blind's slats around the gap between them do; a strip under a desk's
+// front edge seen from above does not (the desk on one side, the floor under it on the other:
+// the desk's front face and what lies under it, which no scan saw). Such a strip stays
+// unknown, for the other probes and the render's hole fill: the near surface's colour there
+// was most of the error of the probes' guesses. `in_hole` is scratch, all 0 on entry and on
+// return.
+bool within_near_surface(const ProbeMap& map, const std::vector<std::uint32_t>& hole, float split,
+                         std::vector<std::uint8_t>& in_hole) {
+    const int n = map.resolution;
+    for (const std::uint32_t t : hole) {
+        in_hole[t] = 1;
+    }
+    // The distance of the first texel past the hole from (x, y) in steps of (dx, dy) where it
+    // is a measured surface nearer than the split; +inf otherwise.
+    const auto near_beyond = [&](int x, int y, int dx, int dy) {
+        constexpr float none = std::numeric_limits<float>::infinity();
+        for (;;) {
+            x += dx;
+            y += dy;
+            if (x < 0 || y < 0 || x >= n || y >= n) {
+                return none;
+            }
+            const std::size_t u = oct::texel_index({x, y}, n);
+            if (in_hole[u] == 0) {
+                return map.state(u) == TexelState::Surface && map.distance[u] < split
+                           ? map.distance[u]
+                           : none;
+            }
+        }
+    };
+    const auto one_surface = [](float a, float b) {
+        return std::isfinite(a) && std::isfinite(b) &&
+               std::abs(a - b) <= kSilhouetteSpread * std::min(a, b);
+    };
+    std::size_t within = 0;
+    for (const std::uint32_t t : hole) {
+        const int x = static_cast<int>(t % static_cast<std::uint32_t>(n));
+        const int y = static_cast<int>(t / static_cast<std::uint32_t>(n));
+        if (one_surface(near_beyond(x, y, 1, 0), near_beyond(x, y, -1, 0)) ||
+            one_surface(near_beyond(x, y, 0, 1), near_beyond(x, y, 0, -1))) {
+            ++within;
+        }
+    }
+    for (const std::uint32_t t : hole) {
+        in_hole[t] = 0;
+    }
+    return 2 * within >= hole.size();
 }
 
 // Fills a disocclusion hole from its background side only, layer by layer inward (onion
@@ -490,10 +543,13 @@ void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
     std::vector<std::pair<std::size_t, float>> disocclusions;
     {
         std::vector<std::uint8_t> in_border(map.texel_count(), 0);
+        std::vector<std::uint8_t> in_hole(map.texel_count(), 0);
         for (std::size_t h = 0; h < holes.size(); ++h) {
             const float split = disocclusion_split(map, holes[h], in_border);
             if (split > 0.0f) {
                 disocclusions.emplace_back(h, split);
+            } else if (split < 0.0f && !within_near_surface(map, holes[h], -split, in_hole)) {
+                continue; // beside a near edge, not within the near surface: stays unknown
             } else {
                 for (const std::uint32_t t : holes[h]) {
                     fill[t] = 1;

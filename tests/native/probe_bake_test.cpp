@@ -321,6 +321,46 @@ TEST(ProbeBake, AGapInANearSurfaceTakesTheNearSurfaceNeverABlend) {
     }
 }
 
+TEST(ProbeBake, AStripBetweenANearEdgeAndWhatLiesUnderItStaysUnknown) {
+    // A desk's front edge seen from above (1 m, rows above 10), the floor under the desk
+    // nearer than the wall (1.3 m, rows 14 and below), the wall beyond the desk's ends (5 m):
+    // between the edge and the floor a strip no scan saw. Its border is mostly near, so it
+    // is no disocclusion; but no one surface lies on both sides of its texels (the desk above,
+    // the floor below, the wall at its ends): it is not a gap in the desk, and it stays
+    // unknown rather than take the desk's colour.
+    ProbeMap map(32, glm::dvec3(0.0));
+    for (int y = 0; y < 32; ++y) {
+        for (int x = 0; x < 32; ++x) {
+            const float d = x < 4 || x > 27 ? 5.0f : y < 10 ? 1.0f : 1.3f;
+            map.set_surface(oct::texel_index({x, y}, 32), d, glm::vec3(0.5f), glm::vec3(0, 0, 1),
+                            1.0f);
+        }
+    }
+    std::vector<std::size_t> strip;
+    for (int y = 10; y < 14; ++y) {
+        for (int x = 4; x < 28; ++x) {
+            strip.push_back(oct::texel_index({x, y}, 32));
+            map.set_unknown(strip.back());
+        }
+    }
+    fill_small_holes(map, 8);
+    for (const std::size_t i : strip) {
+        EXPECT_EQ(map.state(i), TexelState::Unknown);
+    }
+    // The same strip with the desk on both sides (a gap in it): filled with the desk.
+    for (int y = 14; y < 32; ++y) {
+        for (int x = 4; x < 28; ++x) {
+            map.set_surface(oct::texel_index({x, y}, 32), 1.0f, glm::vec3(0.5f), glm::vec3(0, 0, 1),
+                            1.0f);
+        }
+    }
+    fill_small_holes(map, 8);
+    for (const std::size_t i : strip) {
+        EXPECT_EQ(map.state(i), TexelState::Inferred);
+        EXPECT_FLOAT_EQ(map.distance[i], 1.0f);
+    }
+}
+
 TEST(ProbeBake, AFarSurfaceSeenThroughGapsInANearerOneIsAHoleInTheNearOne) {
     // A near surface (1 m) with a lattice of 2×2-texel gaps through which the far one (3 m)
     // was measured: what a surface sampled sparsely leaves between its splats. Each gap is
