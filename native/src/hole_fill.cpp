@@ -25,7 +25,7 @@ namespace {
 // surface, so a far surface never shows through a near one; a disocclusion takes the far one.
 constexpr float kSilhouetteSpread = 0.05f;
 // A hole on a silhouette whose border is at least this much the far surface is a
-// disocclusion, filled from behind (disocclusion_split).
+// disocclusion, filled from behind (classify_hole_border).
 constexpr float kMinFarBorder = 0.25f;
 // Below this |cos| between a texel's ray and a neighbour's surface plane the plane is too
 // grazing to continue, and the neighbour's own distance is used.
@@ -149,10 +149,15 @@ std::vector<std::vector<std::uint32_t>> small_holes(const ProbeMap& map, int max
 // surface (a spread over kSilhouetteSpread) and whose far part is at least kMinFarBorder of
 // the border lies where the scans could not see behind the near surface (a scanner's shadow,
 // seen from elsewhere): what is there is the far surface, continued. A hole bordered mostly by
-// the near surface is a gap in that surface (a thin object's missing points): minus the split
-// (the near surface is nearer than it); a hole on no silhouette: 0.
-float disocclusion_split(const ProbeMap& map, const std::vector<std::uint32_t>& hole,
-                         std::vector<std::uint8_t>& in_border) {
+// the near surface is a gap in that surface (a thin object's missing points), or lies beside
+// it (within_near_surface tells which).
+struct HoleBorder {
+    enum Kind { kPlain, kNearSurface, kDisocclusion } kind = kPlain; // plain: on no silhouette
+    float split = 0.0f; // on a silhouette: the distance between its near and far surfaces
+};
+
+HoleBorder classify_hole_border(const ProbeMap& map, const std::vector<std::uint32_t>& hole,
+                                std::vector<std::uint8_t>& in_border) {
     const int n = map.resolution;
     std::vector<std::uint32_t> border;
     for (const std::uint32_t t : hole) {
@@ -171,14 +176,15 @@ float disocclusion_split(const ProbeMap& map, const std::vector<std::uint32_t>& 
         far = std::max(far, map.distance[u]);
     }
     if (border.empty() || !(far - near > kSilhouetteSpread * near)) {
-        return 0.0f;
+        return {};
     }
     const float split = 0.5f * (near + far);
     const auto far_count = static_cast<std::size_t>(std::count_if(
         border.begin(), border.end(), [&](std::uint32_t u) { return map.distance[u] >= split; }));
-    return static_cast<float>(far_count) >= kMinFarBorder * static_cast<float>(border.size())
-               ? split
-               : -split;
+    return {static_cast<float>(far_count) >= kMinFarBorder * static_cast<float>(border.size())
+                ? HoleBorder::kDisocclusion
+                : HoleBorder::kNearSurface,
+            split};
 }
 
 // Whether a hole on a silhouette that its border calls a gap in the near surface lies within
@@ -545,10 +551,11 @@ void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
         std::vector<std::uint8_t> in_border(map.texel_count(), 0);
         std::vector<std::uint8_t> in_hole(map.texel_count(), 0);
         for (std::size_t h = 0; h < holes.size(); ++h) {
-            const float split = disocclusion_split(map, holes[h], in_border);
-            if (split > 0.0f) {
-                disocclusions.emplace_back(h, split);
-            } else if (split < 0.0f && !within_near_surface(map, holes[h], -split, in_hole)) {
+            const HoleBorder border = classify_hole_border(map, holes[h], in_border);
+            if (border.kind == HoleBorder::kDisocclusion) {
+                disocclusions.emplace_back(h, border.split);
+            } else if (border.kind == HoleBorder::kNearSurface &&
+                       !within_near_surface(map, holes[h], border.split, in_hole)) {
                 continue; // beside a near edge, not within the near surface: stays unknown
             } else {
                 for (const std::uint32_t t : holes[h]) {
