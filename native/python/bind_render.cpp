@@ -155,15 +155,29 @@ void bind_render(py::module_& m) {
         .def(
             "trace_throughput",
             [](std::shared_ptr<ProbeField> field, const std::string& camera,
-               const std::string& mode, int threads, int repeats, const std::string& start) {
+               const std::string& mode, int threads, int repeats, const std::string& start,
+               const std::string& colour) {
                 const Camera cam = camera_from(camera);
-                const RenderSettings settings =
-                    render_settings(mode, TraceSettings{}.thickness, true, 32);
                 if (start != "camera" && start != "answer") {
                     throw InputError(
                         "trace_throughput: start must be \"camera\" or \"answer\", got \"" + start +
                         "\"");
                 }
+                if (colour != "default" && colour != "texel") {
+                    throw InputError(
+                        "trace_throughput: colour must be \"default\" or \"texel\", got \"" +
+                        colour + "\"");
+                }
+                // "texel": the answering texel's colour alone (nearest, no blending), the
+                // colour a lookup gives and the paper's trace returns: a render's answers with
+                // filter "nearest" and blend 1 (the filters' edge refinement left out too).
+                Fidelity fidelity;
+                if (colour == "texel") {
+                    fidelity.filter = radiance_filter_name(RadianceFilter::Nearest);
+                    fidelity.blend = 1;
+                }
+                const RenderSettings settings =
+                    render_settings(mode, TraceSettings{}.thickness, true, 32, fidelity);
                 const ThroughputStart from =
                     start == "answer" ? ThroughputStart::Answer : ThroughputStart::Camera;
                 ThroughputResult r;
@@ -176,12 +190,16 @@ void bind_render(py::module_& m) {
                 return throughput_dict(r);
             },
             py::arg("camera"), py::arg("mode") = "auto", py::arg("threads") = 0,
-            py::arg("repeats") = 3, py::arg("start") = "camera",
+            py::arg("repeats") = 3, py::arg("start") = "camera", py::arg("colour") = "default",
             "Probe-trace rays per second measured as embree_throughput measures Embree's: the "
             "camera's pixel-centre rays made beforehand, trace only, fastest of `repeats`. "
             "start=\"answer\": each ray starts where its own trace from the camera ended (its "
             "HIT, or as far as an UNKNOWN proved it free), so that no empty space is left to "
-            "skip: the cost of a trace however little it walks.")
+            "skip: the cost of a trace however little it walks. colour=\"default\": each HIT "
+            "coloured as a render colours it (bilinear, blended over the probes that see the "
+            "point); \"texel\": the answering texel's colour alone, as a lookup gives it (a "
+            "render's answers with filter=\"nearest\", blend=1), without the colour's further "
+            "lookups.")
         .def(
             "start_render",
             [](std::shared_ptr<ProbeField> field, const std::string& camera,

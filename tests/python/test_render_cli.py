@@ -82,6 +82,14 @@ def test_trace_throughput_times_the_image_rays_and_the_same_rays_from_their_answ
     assert from_camera["rays_per_second"] > 0 and from_answer["rays_per_second"] > 0
     with pytest.raises(ValueError, match='start must be "camera" or "answer"'):
         field.trace_throughput(camera, start="nowhere")
+    # colour="texel": the answers a render with the paper's colour (nearest texel, no blending)
+    # gives, timed without the default colour's further lookups.
+    _, texel_stats = field.render(camera, threads=2, filter="nearest", blend=1)
+    texel = field.trace_throughput(camera, threads=2, repeats=1, colour="texel")
+    assert texel["rays"] == stats["rays"] and texel["hits"] == texel_stats["hits"]
+    assert texel["rays_per_second"] > 0
+    with pytest.raises(ValueError, match='colour must be "default" or "texel"'):
+        field.trace_throughput(camera, colour="blended")
 
 
 def test_splat_baseline_renders_the_same_camera(native, room):

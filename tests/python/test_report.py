@@ -102,8 +102,11 @@ def test_reference_trace_is_timed_against_embree_on_the_same_rays(tiny_report):
         assert r["trace_from_answer_rays_per_second"] > 0
         assert r["trace_from_answer_over_embree"] == pytest.approx(
             r["trace_from_answer_rays_per_second"] / r["embree_rays_per_second"])
+        assert r["trace_texel_over_embree"] == pytest.approx(
+            r["trace_texel_rays_per_second"] / r["embree_rays_per_second"])
     assert (out / "trace_against_embree.csv").stat().st_size > 100
     assert any("against Embree on the same rays" in line for line in data["findings"]["speed"])
+    assert any("the paper's lookup" in line for line in data["findings"]["speed"])
 
 
 def test_distance_walk_peers_and_stability_are_measured(tiny_report):

@@ -109,7 +109,8 @@ def _speed_section(page, data: Dict[str, object], img, findings) -> None:
                    "and 16 rays a call). The aims: more than Embree with the eye at a probe, a third of it "
                    "elsewhere. 'From answer': the same rays started where their own traces ended (the HIT, or "
                    "as far as an UNKNOWN proved them free), so that nothing is left to skip; what they cost is "
-                   "the floor under the figure before it.", "note")
+                   "the floor under the figure before it. 'Texel colour': the same rays coloured by the texel "
+                   "each met alone (no filter, no blending), as Embree's figure includes no colour at all.", "note")
     page.add(table(data["trace_against_embree"], [
         ("view", "view", text), ("distance_to_nearest_probe", "eye to probe m", num(".3f")),
         ("texels_per_ray", "texels/ray", num(".1f")), ("probes_per_ray", "probes/ray", num(".2f")),
@@ -118,7 +119,9 @@ def _speed_section(page, data: Dict[str, object], img, findings) -> None:
         ("embree_packet_rays_per_second", "Embree packets M rays/s", num(".2f", 1e-6)),
         ("trace_over_embree", "trace / Embree", num(".3f")),
         ("trace_over_embree_packets", "trace / packets", num(".3f")),
-        ("trace_from_answer_over_embree", "from answer / Embree", num(".3f"))]))
+        ("trace_from_answer_over_embree", "from answer / Embree", num(".3f")),
+        ("trace_texel_rays_per_second", "texel colour M rays/s", num(".2f", 1e-6)),
+        ("trace_texel_over_embree", "texel colour / Embree", num(".3f"))]))
 
 
 def _distance_section(page, data: Dict[str, object], img, findings) -> None:

@@ -210,6 +210,14 @@ def _findings(data: Dict[str, object], reference: Optional[Dict[str, object]]) -
             "Started at their own answers, with no empty space left to skip, the same rays trace at " + "; ".join(
             f"{r['trace_from_answer_over_embree']:.2f}×" for r in against) + " Embree's single rays: "
             "the part of the cost that no skipping of empty space removes.")
+        if all(_finite(r.get("trace_texel_over_embree")) for r in against):
+            f["speed"].append(
+                "Coloured by the texel each ray met alone (the paper's lookup: no filter, no blending, "
+                "the same rays), the trace runs at " + "; ".join(
+                    f"'{r['view']}' {r['trace_texel_rays_per_second'] / 1e6:.2f} M rays/s "
+                    f"({r['trace_texel_over_embree']:.2f}×)" for r in against) +
+                " Embree's single rays, which colour nothing: the rest of the default's cost is its "
+                "colour, the filter's and the blend's lookups in the probes around each hit.")
     peers_rows = data["peers"]["rows"]
     methods: Dict[str, List[Dict[str, object]]] = {}
     for r in peers_rows:

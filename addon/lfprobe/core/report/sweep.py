@@ -278,6 +278,11 @@ class Sweep:
         # The same rays started at their own answers: the part of the cost no skipping removes.
         floor = field.trace_throughput(text, threads=ctx.threads, repeats=p.timing_repeats,
                                        start="answer")
+        # The same answers coloured by their texel alone, as a lookup (and the paper's trace)
+        # colours them: the trace without the filter's and the blend's further lookups, the part
+        # comparable with Embree's intersection, which colours nothing.
+        texel = field.trace_throughput(text, threads=ctx.threads, repeats=p.timing_repeats,
+                                       colour="texel")
         embree = embree_rates(ctx.native, ctx.mesh, text, ctx.threads, p.timing_repeats)
         return {"view": view, "distance_to_nearest_probe": eye_to_probe,
                 "texels_per_ray": row["texels_per_ray"], "probes_per_ray": row["probes_per_ray"],
@@ -287,7 +292,9 @@ class Sweep:
                 "trace_over_embree": trace["rays_per_second"] / embree["single"],
                 "trace_over_embree_packets": trace["rays_per_second"] / embree["packet"],
                 "trace_from_answer_rays_per_second": floor["rays_per_second"],
-                "trace_from_answer_over_embree": floor["rays_per_second"] / embree["single"]}
+                "trace_from_answer_over_embree": floor["rays_per_second"] / embree["single"],
+                "trace_texel_rays_per_second": texel["rays_per_second"],
+                "trace_texel_over_embree": texel["rays_per_second"] / embree["single"]}
 
     def _anchor_and_target(self, view, positions: List[List[float]]) -> Tuple[List[float], List[float]]:
         """The probe nearest the view's eye, and the point the eye moves toward: the centre of
