@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
+#include <cstdint>
 #include <limits>
 #include <vector>
 
@@ -149,6 +150,122 @@ HoleRegions hole_regions(const std::vector<std::uint8_t>& hole, const std::vecto
     return r;
 }
 
+// Where the spread of depths on a hole's border exceeds this fraction of the nearest, the hole
+// lies on a silhouette (as a probe's hole fill judges its holes, hole_fill.cpp).
+constexpr float kSilhouetteSpread = 0.05f;
+
+// The fill colours of the holes that lie on a silhouette: a hole whose border holds a near and
+// a far surface (depths that differ by over kSilhouetteSpread of the nearest) is what no probe
+// saw behind the near one, a disocclusion, and what lies there is the far surface continued.
+// Such a hole is filled from its far border alone (the border pixels at least as far as the
+// middle of its border's depths), layer by layer inward: a pixel takes the mean colour of its
+// neighbours already known (that border, then earlier layers), as a probe's hole fill
+// continues the surface behind a disocclusion (hole_fill.cpp). `far_fill` gets the colour of
+// every pixel of such a hole (coverage 1), and `filled` is 1 there; holes deeper than `reach`
+// are left to stay black. Reads only earlier layers, so the result is fixed.
+void fill_disocclusions(const HoleRegions& regions, const std::vector<std::uint8_t>& hole,
+                        const RenderedImage& image, const std::vector<float>& coverage,
+                        std::int32_t reach, std::vector<glm::vec3>& far_fill,
+                        std::vector<std::uint8_t>& filled) {
+    const int w = image.width;
+    const int h = image.height;
+    const std::size_t count = hole.size();
+    const std::size_t region_count = regions.region_depth.size();
+    const auto has_depth = [&](std::size_t u) {
+        return !hole[u] && coverage[u] > 0.0f && std::isfinite(image.depth[u]) &&
+               image.depth[u] > 0.0f;
+    };
+    // Each hole's pixels and the depths on its border.
+    struct Border {
+        std::vector<std::size_t> members;
+        float nearest = std::numeric_limits<float>::infinity();
+        float farthest = 0.0f;
+    };
+    std::vector<Border> borders(region_count);
+    for (std::size_t i = 0; i < count; ++i) {
+        if (!hole[i]) {
+            continue;
+        }
+        const auto r = static_cast<std::size_t>(regions.region[i]);
+        if (regions.region_depth[r] > reach) {
+            continue;
+        }
+        Border& b = borders[r];
+        b.members.push_back(i);
+        for_each_neighbour(i, w, h, [&](std::size_t u) {
+            if (has_depth(u)) {
+                b.nearest = std::min(b.nearest, image.depth[u]);
+                b.farthest = std::max(b.farthest, image.depth[u]);
+            }
+        });
+    }
+    // layer[i]: 0 outside the hole being filled, its layer (1, 2, ...) once filled.
+    std::vector<std::int32_t> layer(count, 0);
+    std::vector<std::size_t> frontier;
+    std::vector<std::size_t> next;
+    std::vector<std::pair<std::size_t, glm::vec3>> fills;
+    for (const Border& b : borders) {
+        if (b.members.empty() || !(b.farthest - b.nearest > kSilhouetteSpread * b.nearest)) {
+            continue;
+        }
+        const float split = 0.5f * (b.nearest + b.farthest);
+        constexpr std::int32_t kWaiting = -1;
+        for (const std::size_t i : b.members) {
+            layer[i] = kWaiting;
+        }
+        // The colour a known neighbour gives: the far border's (premultiplied by its coverage)
+        // or an earlier layer's.
+        const auto add_known = [&](std::size_t u, std::int32_t now, glm::vec3& sum, float& weight) {
+            if (hole[u]) {
+                if (layer[u] > 0 && layer[u] < now) {
+                    sum += far_fill[u];
+                    weight += 1.0f;
+                }
+            } else if (has_depth(u) && image.depth[u] >= split) {
+                sum += glm::vec3(image.rgba[4 * u], image.rgba[4 * u + 1], image.rgba[4 * u + 2]);
+                weight += std::min(coverage[u], 1.0f);
+            }
+        };
+        frontier.clear();
+        for (const std::size_t i : b.members) {
+            glm::vec3 sum(0.0f);
+            float weight = 0.0f;
+            for_each_neighbour(i, w, h, [&](std::size_t u) { add_known(u, 1, sum, weight); });
+            if (weight > 0.0f) {
+                frontier.push_back(i);
+            }
+        }
+        for (std::int32_t now = 1; !frontier.empty(); ++now) {
+            fills.clear();
+            for (const std::size_t i : frontier) {
+                glm::vec3 sum(0.0f);
+                float weight = 0.0f;
+                for_each_neighbour(i, w, h, [&](std::size_t u) { add_known(u, now, sum, weight); });
+                if (weight > 0.0f) {
+                    fills.emplace_back(i, sum / weight);
+                }
+            }
+            next.clear();
+            for (const auto& [i, colour] : fills) {
+                far_fill[i] = colour;
+                layer[i] = now;
+                filled[i] = 1;
+            }
+            for (const auto& [i, colour] : fills) {
+                for_each_neighbour(i, w, h, [&](std::size_t u) {
+                    if (hole[u] && layer[u] == kWaiting) {
+                        layer[u] = now + 1; // queued: not known before the next layer is done
+                        next.push_back(u);
+                    }
+                });
+            }
+            // Queued pixels are marked with the layer that will fill them, above `now`, so
+            // that a pixel of this layer never reads another of it.
+            frontier.swap(next);
+        }
+    }
+}
+
 } // namespace
 
 int default_hole_fill_pixels(int width, int height) {
@@ -186,6 +303,12 @@ UnknownFillStats fill_unknown_pixels(RenderedImage& image, std::span<const float
     }
     const HoleRegions regions = hole_regions(hole, coverage, w, h);
     const std::int32_t reach = (max_width + 1) / 2;
+    // Holes on a silhouette, filled from the surface behind instead of the pull-push below.
+    std::vector<glm::vec3> far_fill(count, glm::vec3(0.0f));
+    std::vector<std::uint8_t> far_filled(count, 0);
+    if (image.depth.size() == count) {
+        fill_disocclusions(regions, hole, image, coverage, reach, far_fill, far_filled);
+    }
 
     std::vector<Level> levels;
     levels.push_back(std::move(base));
@@ -212,8 +335,9 @@ UnknownFillStats fill_unknown_pixels(RenderedImage& image, std::span<const float
             }
             ++stats.pixels_filled;
         }
+        const glm::vec3& colour = far_filled[i] ? far_fill[i] : fill[i];
         for (int c = 0; c < 3; ++c) {
-            image.rgba[4 * i + static_cast<std::size_t>(c)] += u * fill[i][c];
+            image.rgba[4 * i + static_cast<std::size_t>(c)] += u * colour[c];
         }
         image.rgba[4 * i + 3] = std::min(1.0f, coverage[i] + u);
     }

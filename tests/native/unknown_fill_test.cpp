@@ -143,6 +143,43 @@ TEST(UnknownFill, AHoleBetweenTwoColoursTakesEachFromItsOwnSide) {
     EXPECT_LT(canvas.at(19, 8).x, 0.5f);
 }
 
+// A desk's front edge (near, red) over the floor under it (far, blue), and a hole no probe saw
+// along the edge: the floor continues there, so the hole takes the floor's colour only, as a
+// probe's own hole fill continues the surface behind a disocclusion. The near side keeps its
+// colour, and a hole whose border lies on one depth still takes each colour from its side.
+TEST(UnknownFill, AHoleBesideANearEdgeIsFilledFromTheSurfaceBehind) {
+    const glm::vec3 red(1.0f, 0.0f, 0.0f);
+    const glm::vec3 blue(0.0f, 0.0f, 1.0f);
+    for (const float far : {3.0f, 1.02f}) {
+        Canvas canvas(32, 16, red);
+        for (int y = 0; y < 16; ++y) {
+            for (int x = 0; x < 32; ++x) {
+                const std::size_t i = canvas.image.index(x, y);
+                if (x >= 16) {
+                    canvas.paint(i, blue);
+                }
+                canvas.image.depth[i] = x >= 16 ? far : 1.0f;
+            }
+        }
+        canvas.hole(12, 0, 20, 16);
+        (void)fill_unknown_pixels(canvas.image, canvas.unknown, 8);
+        for (int x = 12; x < 20; ++x) {
+            const glm::vec4 p = canvas.at(x, 8);
+            if (far > 1.5f) {
+                EXPECT_NEAR(p.z, 1.0f, 1e-6f) << x; // the floor's colour alone
+                EXPECT_EQ(p.x, 0.0f) << x;
+            } else {
+                EXPECT_NEAR(p.x + p.z, 1.0f, 1e-5f) << x; // one depth: a mix, as before
+            }
+        }
+        if (far <= 1.5f) {
+            EXPECT_GT(canvas.at(12, 8).x, 0.5f);
+            EXPECT_LT(canvas.at(19, 8).x, 0.5f);
+        }
+        EXPECT_EQ(canvas.at(5, 8), glm::vec4(red, 1.0f)); // the near side is not touched
+    }
+}
+
 TEST(UnknownFill, MissIsNeitherFilledNorASource) {
     Canvas canvas(24, 24, {0.8f, 0.8f, 0.8f});
     // The left third MISS (nothing there: colour 0, no unknown share), a hole beside it.
