@@ -199,7 +199,8 @@ void fill_disocclusions(const HoleRegions& regions, const std::vector<std::uint8
             }
         });
     }
-    // layer[i]: 0 outside the hole being filled, its layer (1, 2, ...) once filled.
+    // layer[i]: 0 outside the holes filled here, -1 waiting, the layer that will fill it once
+    // queued, and the layer that filled it (1, 2, ...) after.
     std::vector<std::int32_t> layer(count, 0);
     std::vector<std::size_t> frontier;
     std::vector<std::size_t> next;
