@@ -14,27 +14,23 @@
 #include <tbb/parallel_for.h>
 
 #include "grid_neighbours.hpp"
+#include "hole_layers.hpp"
 #include "lfprobe/probe_bake.hpp"
 
 namespace lfprobe {
 
 namespace {
 
-// Where the spread of distances among the texels a fill draws from exceeds this fraction of
-// the nearest one, the hole sits on a silhouette. A pull-push fill then takes the nearest
-// surface, so a far surface never shows through a near one; a disocclusion takes the far one.
-constexpr float kSilhouetteSpread = 0.05f;
+// Where the spread of distances among the texels a fill draws from exceeds kSilhouetteSpread
+// (hole_layers.hpp) of the nearest one, the hole sits on a silhouette. A pull-push fill then
+// takes the nearest surface, so a far surface never shows through a near one; a disocclusion
+// takes the far one.
 // A hole on a silhouette whose border is at least this much the far surface is a
 // disocclusion, filled from behind (classify_hole_border).
 constexpr float kMinFarBorder = 0.25f;
 // Below this |cos| between a texel's ray and a neighbour's surface plane the plane is too
 // grazing to continue, and the neighbour's own distance is used.
 constexpr float kMinPlaneCosine = 0.05f;
-// fill_from_background's texel tags: outside the hole, in it and not reached yet, queued for
-// the next layer; a filled texel holds its layer (1, 2, ...).
-constexpr std::int32_t kOutside = std::numeric_limits<std::int32_t>::max();
-constexpr std::int32_t kUnfilled = kOutside - 1;
-constexpr std::int32_t kQueued = kOutside - 2;
 
 // One level of the pull pyramid. Its arrays are left unset when made and each texel is set
 // (clear) by the task that fills its row: set on one thread, a 1024² level's 75 MB took longer
@@ -248,53 +244,36 @@ bool within_near_surface(const ProbeMap& map, const std::vector<std::uint32_t>& 
 void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole, float split,
                           std::vector<std::int32_t>& layer_of) {
     const int n = map.resolution;
-    for (const std::uint32_t t : hole) {
-        layer_of[t] = kUnfilled;
-    }
-    // A known neighbour for layer `layer`: the background border, or a texel of this hole
-    // filled by an earlier layer.
-    auto known = [&](std::uint32_t u, std::int32_t layer) {
-        return layer_of[u] < layer ||
-               (map.state(u) == TexelState::Surface && map.distance[u] >= split);
-    };
     struct Fill {
-        std::uint32_t t;
         float distance;
         glm::vec3 rgb;
         glm::vec3 normal;
     };
-    std::vector<std::uint32_t> frontier;
-    for (const std::uint32_t t : hole) {
-        bool next_to_known = false;
-        for_each_neighbour(t, n, n, [&](std::uint32_t u) { next_to_known |= known(u, 1); });
-        if (next_to_known) {
-            frontier.push_back(t);
-        }
-    }
-    std::vector<Fill> fills;
-    for (std::int32_t layer = 1; !frontier.empty(); ++layer) {
-        fills.clear();
-        for (const std::uint32_t t : frontier) {
-            const glm::vec3 dir =
-                oct::texel_direction({static_cast<int>(t % static_cast<std::uint32_t>(n)),
-                                      static_cast<int>(t / static_cast<std::uint32_t>(n))},
-                                     n);
-            Fill f{t, 0.0f, glm::vec3(0.0f), glm::vec3(0.0f)};
+    const auto direction_of = [n](std::uint32_t t) {
+        return oct::texel_direction({static_cast<int>(t % static_cast<std::uint32_t>(n)),
+                                     static_cast<int>(t / static_cast<std::uint32_t>(n))},
+                                    n);
+    };
+    fill_hole_in_layers(
+        hole, n, n, layer_of,
+        // The background border.
+        [&](std::uint32_t u) {
+            return map.state(u) == TexelState::Surface && map.distance[u] >= split;
+        },
+        [&](std::uint32_t t, auto&& known) {
+            const glm::vec3 dir = direction_of(t);
+            Fill f{0.0f, glm::vec3(0.0f), glm::vec3(0.0f)};
             int from = 0;
             for_each_neighbour(t, n, n, [&](std::uint32_t u) {
-                if (!known(u, layer)) {
+                if (!known(u)) {
                     return;
                 }
                 const float d = map.distance[u];
                 const glm::vec3 normal = map.normal_at(u);
-                const glm::vec3 ud =
-                    oct::texel_direction({static_cast<int>(u % static_cast<std::uint32_t>(n)),
-                                          static_cast<int>(u / static_cast<std::uint32_t>(n))},
-                                         n);
                 const float cos_plane = glm::dot(normal, dir);
                 float s = d;
                 if (std::abs(cos_plane) >= kMinPlaneCosine) {
-                    const float on_plane = glm::dot(normal, d * ud) / cos_plane;
+                    const float on_plane = glm::dot(normal, d * direction_of(u)) / cos_plane;
                     if (on_plane > 0.5f * d && on_plane < 2.0f * d) {
                         s = on_plane;
                     }
@@ -308,28 +287,13 @@ void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole,
             f.distance /= static_cast<float>(from);
             f.rgb /= static_cast<float>(from);
             f.normal = len > 0.0f ? f.normal / len : glm::vec3(0.0f);
-            fills.push_back(f);
-        }
-        const float confidence =
-            std::ldexp(1.0f, -static_cast<int>(std::bit_width(static_cast<unsigned>(layer))));
-        std::vector<std::uint32_t> next;
-        for (const Fill& f : fills) {
-            map.set_surface(f.t, f.distance, f.rgb, f.normal, confidence);
-            layer_of[f.t] = layer;
-        }
-        for (const Fill& f : fills) {
-            for_each_neighbour(f.t, n, n, [&](std::uint32_t u) {
-                if (layer_of[u] == kUnfilled) {
-                    layer_of[u] = kQueued;
-                    next.push_back(u);
-                }
-            });
-        }
-        frontier.swap(next);
-    }
-    for (const std::uint32_t t : hole) {
-        layer_of[t] = kOutside; // every texel was reached: the hole is connected
-    }
+            return f;
+        },
+        [&](std::uint32_t t, const Fill& f, std::int32_t layer) {
+            const float confidence =
+                std::ldexp(1.0f, -static_cast<int>(std::bit_width(static_cast<unsigned>(layer))));
+            map.set_surface(t, f.distance, f.rgb, f.normal, confidence);
+        });
 }
 
 // The pull-push fill (the holes that are not disocclusions): a pull pyramid of the measured
@@ -570,7 +534,7 @@ void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
     if (disocclusions.empty()) {
         return;
     }
-    std::vector<std::int32_t> layer_of(map.texel_count(), kOutside);
+    std::vector<std::int32_t> layer_of(map.texel_count(), kOutsideHole);
     for (const auto& [h, split] : disocclusions) {
         fill_from_background(map, holes[h], split, layer_of);
     }

@@ -10,6 +10,7 @@
 #include <glm/vec3.hpp>
 
 #include "grid_neighbours.hpp"
+#include "hole_layers.hpp"
 #include "lfprobe/error.hpp"
 
 namespace lfprobe {
@@ -150,19 +151,14 @@ HoleRegions hole_regions(const std::vector<std::uint8_t>& hole, const std::vecto
     return r;
 }
 
-// Where the spread of depths on a hole's border exceeds this fraction of the nearest, the hole
-// lies on a silhouette (as a probe's hole fill judges its holes, hole_fill.cpp).
-constexpr float kSilhouetteSpread = 0.05f;
-
 // The fill colours of the holes that lie on a silhouette: a hole whose border holds a near and
 // a far surface (depths that differ by over kSilhouetteSpread of the nearest) is what no probe
 // saw behind the near one, a disocclusion, and what lies there is the far surface continued.
 // Such a hole is filled from its far border alone (the border pixels at least as far as the
-// middle of its border's depths), layer by layer inward: a pixel takes the mean colour of its
-// neighbours already known (that border, then earlier layers), as a probe's hole fill
-// continues the surface behind a disocclusion (hole_fill.cpp). `far_fill` gets the colour of
-// every pixel of such a hole (coverage 1), and `filled` is 1 there; holes deeper than `reach`
-// are left to stay black. Reads only earlier layers, so the result is fixed.
+// middle of its border's depths), layer by layer inward, a pixel the mean colour of its
+// neighbours already known, as a probe's hole fill continues the surface behind a
+// disocclusion (fill_hole_in_layers). `far_fill` gets the colour of every pixel of such a hole
+// (coverage 1), and `filled` is 1 there; holes deeper than `reach` are left to stay black.
 void fill_disocclusions(const HoleRegions& regions, const std::vector<std::uint8_t>& hole,
                         const RenderedImage& image, const std::vector<float>& coverage,
                         std::int32_t reach, std::vector<glm::vec3>& far_fill,
@@ -170,7 +166,6 @@ void fill_disocclusions(const HoleRegions& regions, const std::vector<std::uint8
     const int w = image.width;
     const int h = image.height;
     const std::size_t count = hole.size();
-    const std::size_t region_count = regions.region_depth.size();
     const auto has_depth = [&](std::size_t u) {
         return !hole[u] && coverage[u] > 0.0f && std::isfinite(image.depth[u]) &&
                image.depth[u] > 0.0f;
@@ -181,7 +176,7 @@ void fill_disocclusions(const HoleRegions& regions, const std::vector<std::uint8
         float nearest = std::numeric_limits<float>::infinity();
         float farthest = 0.0f;
     };
-    std::vector<Border> borders(region_count);
+    std::vector<Border> borders(regions.region_depth.size());
     for (std::size_t i = 0; i < count; ++i) {
         if (!hole[i]) {
             continue;
@@ -199,71 +194,39 @@ void fill_disocclusions(const HoleRegions& regions, const std::vector<std::uint8
             }
         });
     }
-    // layer[i]: 0 outside the holes filled here, -1 waiting, the layer that will fill it once
-    // queued, and the layer that filled it (1, 2, ...) after.
-    std::vector<std::int32_t> layer(count, 0);
-    std::vector<std::size_t> frontier;
-    std::vector<std::size_t> next;
-    std::vector<std::pair<std::size_t, glm::vec3>> fills;
+    std::vector<std::int32_t> layer_of(count, kOutsideHole);
     for (const Border& b : borders) {
         if (b.members.empty() || !(b.farthest - b.nearest > kSilhouetteSpread * b.nearest)) {
             continue;
         }
         const float split = 0.5f * (b.nearest + b.farthest);
-        constexpr std::int32_t kWaiting = -1;
-        for (const std::size_t i : b.members) {
-            layer[i] = kWaiting;
-        }
-        // The colour a known neighbour gives: the far border's (premultiplied by its coverage)
-        // or an earlier layer's.
-        const auto add_known = [&](std::size_t u, std::int32_t now, glm::vec3& sum, float& weight) {
-            if (hole[u]) {
-                if (layer[u] > 0 && layer[u] < now) {
-                    sum += far_fill[u];
-                    weight += 1.0f;
-                }
-            } else if (has_depth(u) && image.depth[u] >= split) {
-                sum += glm::vec3(image.rgba[4 * u], image.rgba[4 * u + 1], image.rgba[4 * u + 2]);
-                weight += std::min(coverage[u], 1.0f);
-            }
-        };
-        frontier.clear();
-        for (const std::size_t i : b.members) {
-            glm::vec3 sum(0.0f);
-            float weight = 0.0f;
-            for_each_neighbour(i, w, h, [&](std::size_t u) { add_known(u, 1, sum, weight); });
-            if (weight > 0.0f) {
-                frontier.push_back(i);
-            }
-        }
-        for (std::int32_t now = 1; !frontier.empty(); ++now) {
-            fills.clear();
-            for (const std::size_t i : frontier) {
+        fill_hole_in_layers(
+            b.members, w, h, layer_of,
+            [&](std::size_t u) { return has_depth(u) && image.depth[u] >= split; },
+            [&](std::size_t i, auto&& known) {
+                // The far border's colours (premultiplied by their coverage) and the earlier
+                // layers' (coverage 1).
                 glm::vec3 sum(0.0f);
                 float weight = 0.0f;
-                for_each_neighbour(i, w, h, [&](std::size_t u) { add_known(u, now, sum, weight); });
-                if (weight > 0.0f) {
-                    fills.emplace_back(i, sum / weight);
-                }
-            }
-            next.clear();
-            for (const auto& [i, colour] : fills) {
-                far_fill[i] = colour;
-                layer[i] = now;
-                filled[i] = 1;
-            }
-            for (const auto& [i, colour] : fills) {
                 for_each_neighbour(i, w, h, [&](std::size_t u) {
-                    if (hole[u] && layer[u] == kWaiting) {
-                        layer[u] = now + 1; // queued: not known before the next layer is done
-                        next.push_back(u);
+                    if (!known(u)) {
+                        return;
+                    }
+                    if (hole[u]) {
+                        sum += far_fill[u];
+                        weight += 1.0f;
+                    } else {
+                        sum += glm::vec3(image.rgba[4 * u], image.rgba[4 * u + 1],
+                                         image.rgba[4 * u + 2]);
+                        weight += std::min(coverage[u], 1.0f);
                     }
                 });
-            }
-            // Queued pixels are marked with the layer that will fill them, above `now`, so
-            // that a pixel of this layer never reads another of it.
-            frontier.swap(next);
-        }
+                return sum / weight;
+            },
+            [&](std::size_t i, const glm::vec3& colour, std::int32_t) {
+                far_fill[i] = colour;
+                filled[i] = 1;
+            });
     }
 }
 

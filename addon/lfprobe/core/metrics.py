@@ -196,10 +196,15 @@ def psnr_over(ref_rgb: np.ndarray, test_rgb: np.ndarray, mask: np.ndarray) -> Op
     return psnr(np.asarray(ref_rgb)[mask], np.asarray(test_rgb)[mask])
 
 
+def _squared_error(reference: Dict[str, np.ndarray], test: Dict[str, np.ndarray]) -> np.ndarray:
+    """Per pixel, the squared sRGB error summed over the channels (what psnr averages)."""
+    return ((srgb_encode(visible_colour(reference)) - srgb_encode(visible_colour(test))) ** 2).sum(axis=-1)
+
+
 def error_share(reference: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
                 mask: np.ndarray) -> float:
     """The fraction of the squared error (sRGB, as psnr) that the pixels of `mask` carry."""
-    squared = ((srgb_encode(visible_colour(reference)) - srgb_encode(visible_colour(test))) ** 2).sum(axis=-1)
+    squared = _squared_error(reference, test)
     total = float(squared.sum())
     return float(squared[np.asarray(mask, dtype=bool)].sum()) / total if total > 0 else 0.0
 
@@ -214,7 +219,7 @@ def guessed_figures(reference: Dict[str, np.ndarray], test: Dict[str, np.ndarray
         return {}
     guessed = np.asarray(test["guessed"]).reshape(np.asarray(test["rgba"]).shape[:2]) != 0
     # The images encoded once for all three figures.
-    squared = ((srgb_encode(visible_colour(reference)) - srgb_encode(visible_colour(test))) ** 2).sum(axis=-1)
+    squared = _squared_error(reference, test)
     total = float(squared.sum())
     off = ~guessed
     off_mse = float(squared[off].sum()) / (3 * int(off.sum())) if off.any() else None

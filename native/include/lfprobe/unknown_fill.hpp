@@ -29,10 +29,10 @@ struct UnknownFillStats {
 // is filled only when its 8-connected region of such pixels lies within ceil(max_width / 2)
 // pixels of a pixel with a HIT: holes at most max_width pixels across. A hole on a silhouette
 // (the depths on its border differ by over 5 % of the nearest) is a disocclusion, what no
-// probe saw behind the near surface: the near surface's pixels within that reach of it (nearer
-// than the middle of its border's depths) give it no colour, so it takes the surface behind's.
-// max_width 0 fills nothing. Deterministic: the same image and shares give the same result on
-// any thread count.
+// probe saw behind the near surface: it is filled from its far border alone (the pixels at
+// least as far as the middle of its border's depths), layer by layer inward, as a probe's
+// disocclusions are, instead of by the pull-push. max_width 0 fills nothing. Deterministic: the
+// same image and shares give the same result on any thread count.
 UnknownFillStats fill_unknown_pixels(RenderedImage& image, std::span<const float> unknown_share,
                                      int max_width);
 
