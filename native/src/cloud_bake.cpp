@@ -114,17 +114,16 @@ std::vector<StagedProbe> stage_probes(const ProbePlacement& placement,
                              std::to_string(placement.positions.size()) + ")");
         }
     }
-    std::vector<StagedProbe> staged;
     // One probe's scratch arrays serve the next (bake_scratch.hpp).
     const BakeScratchScope scratch;
+    OverlappedProbeWrites writes(staging);
     for (const std::size_t i : indices) {
         if (progress != nullptr) {
             progress->throw_if_cancelled();
         }
-        const ProbeMap map = bake(placement.positions[i]);
-        staged.push_back(write_staged_probe(staging, i, map));
+        writes.write(i, bake(placement.positions[i]));
     }
-    return staged;
+    return writes.finish();
 }
 
 } // namespace

@@ -268,24 +268,22 @@ BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest
     try {
         BakeSummary summary;
         manifest.probes.clear();
-        std::vector<StagedProbe> staged;
         // One probe's scratch arrays serve the next (bake_scratch.hpp).
         const BakeScratchScope scratch;
+        OverlappedProbeWrites writes(staging);
         for (std::size_t i = 0; i < count; ++i) {
             if (progress != nullptr) {
                 progress->throw_if_cancelled();
             }
-            auto start = std::chrono::steady_clock::now();
-            const ProbeMap map = bake_one(i);
+            const auto start = std::chrono::steady_clock::now();
+            ProbeMap map = bake_one(i);
             summary.bake_seconds += seconds_since(start);
-            start = std::chrono::steady_clock::now();
-            if (progress != nullptr) {
-                progress->begin_stage(
-                    "writing probe " + std::to_string(i + 1) + " of " + std::to_string(count), 1);
-            }
-            staged.push_back(write_staged_probe(staging, i, map));
-            summary.write_seconds += seconds_since(start);
-            manifest.probes.push_back(staged.back().record);
+            writes.write(i, std::move(map));
+        }
+        const std::vector<StagedProbe> staged = writes.finish();
+        summary.write_seconds = writes.write_seconds();
+        for (const StagedProbe& probe : staged) {
+            manifest.probes.push_back(probe.record);
         }
         finish_probe_set_staging(folder, manifest);
         add_staged_figures(summary, staged);

@@ -1,5 +1,6 @@
 #include "lfprobe/probe_set_staging.hpp"
 
+#include <chrono>
 #include <filesystem>
 #include <system_error>
 
@@ -148,6 +149,47 @@ StagedProbe write_staged_probe(const std::string& staging, std::size_t index, co
         ProbeRecord{file, map.position, map.resolution, coverage_of(map), map.memory_bytes()};
     staged.bytes_on_disk = static_cast<std::size_t>(fs::file_size(path, ec));
     return staged;
+}
+
+OverlappedProbeWrites::~OverlappedProbeWrites() {
+    try {
+        writes_.wait();
+    } catch (...) {
+        // Already on the way out of a failed bake: its own error is the one to report.
+    }
+}
+
+void OverlappedProbeWrites::wait_for_pending() {
+    writes_.wait();
+    if (error_) {
+        std::rethrow_exception(std::exchange(error_, nullptr));
+    }
+    if (has_pending_) {
+        staged_.push_back(pending_);
+        has_pending_ = false;
+        pending_map_.reset();
+    }
+}
+
+void OverlappedProbeWrites::write(std::size_t index, ProbeMap map) {
+    wait_for_pending();
+    pending_map_ = std::make_unique<ProbeMap>(std::move(map));
+    has_pending_ = true;
+    writes_.run([this, index] {
+        try {
+            const auto start = std::chrono::steady_clock::now();
+            pending_ = write_staged_probe(staging_, index, *pending_map_);
+            write_seconds_ +=
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        } catch (...) {
+            error_ = std::current_exception();
+        }
+    });
+}
+
+std::vector<StagedProbe> OverlappedProbeWrites::finish() {
+    wait_for_pending();
+    return std::move(staged_);
 }
 
 void finish_probe_set_staging(const std::string& folder, const ProbeSetManifest& listed) {

@@ -136,3 +136,28 @@ TEST(ProbeSetStaging, RemovingTheStagingFolderCallsTheBakeOffAndFinishDropsStray
     // Six probes, their known space (merged from the probes' own) and the manifest.
     EXPECT_EQ(std::distance(fs::directory_iterator(folder), fs::directory_iterator{}), 8);
 }
+
+// A set's writes run beside its next probe's bake (OverlappedProbeWrites): the probes come back
+// in the order handed over, and a write that fails (its staging folder removed, as a cancelled
+// bake does) is reported by the next call rather than lost on its worker.
+TEST(ProbeSetStaging, OverlappedWritesKeepTheOrderAndReportAFailedWrite) {
+    const fs::path root = fresh_dir("overlapped");
+    const std::string staging = open_probe_set_staging((root / "set").string());
+    {
+        OverlappedProbeWrites writes(staging);
+        for (const std::size_t index : {std::size_t{2}, std::size_t{0}, std::size_t{1}}) {
+            writes.write(index, ProbeMap(8, glm::dvec3(static_cast<double>(index), 0.0, 0.0)));
+        }
+        const std::vector<StagedProbe> staged = writes.finish();
+        ASSERT_EQ(staged.size(), 3u);
+        EXPECT_EQ(staged[0].index, 2u);
+        EXPECT_EQ(staged[1].index, 0u);
+        EXPECT_EQ(staged[2].index, 1u);
+        EXPECT_EQ(staged[1].record.position, glm::dvec3(0.0, 0.0, 0.0));
+        EXPECT_TRUE(fs::exists(fs::path(staging) / staged[0].record.file));
+    }
+    OverlappedProbeWrites writes(staging);
+    fs::remove_all(staging);
+    writes.write(3, ProbeMap(8, glm::dvec3(0.0)));
+    EXPECT_THROW((void)writes.finish(), IoError);
+}

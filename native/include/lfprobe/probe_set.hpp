@@ -78,7 +78,7 @@ struct BakeSummary {
     // then the read, hierarchy_seconds 0).
     bool prepared_from_cache = false;
     double bake_seconds = 0.0;  // all probes, splatting and hole filling
-    double write_seconds = 0.0; // EXR encoding and writing
+    double write_seconds = 0.0; // EXR encoding and writing (beside the next probe's bake)
     ProbeCoverage mean_coverage;
     std::size_t bytes_in_memory_per_probe = 0;
     std::size_t bytes_on_disk = 0;

@@ -6,8 +6,12 @@
 #pragma once
 
 #include <cstddef>
+#include <exception>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include <tbb/task_group.h>
 
 #include "lfprobe/probe_map.hpp"
 #include "lfprobe/probe_set.hpp"
@@ -35,6 +39,39 @@ struct StagedProbe {
 // IoError when `staging` is gone: removing the staging folder is how a bake is called off.
 [[nodiscard]] StagedProbe write_staged_probe(const std::string& staging, std::size_t index,
                                              const ProbeMap& map);
+
+// A set's probes written into `staging` while the next one bakes: write(index, map) hands a
+// baked probe over and returns once the probe before it is written, so at most one write runs
+// beside the caller's next bake. The write's serial parts (the file, the known space's sort) then
+// use a core the bake leaves idle: a 2048² probe from the lab room's 0.1° scans spends 0.8 s of
+// its 4.4 s writing. The writes run as tasks of the caller's TBB arena, so a bake limited to
+// one thread writes on that one thread, after its bake. finish() waits for the last write and
+// returns every staged probe in the order given; a write's error is rethrown by the call after
+// it. The destructor waits for a write still running (a bake that threw or was cancelled).
+class OverlappedProbeWrites {
+public:
+    explicit OverlappedProbeWrites(std::string staging) : staging_(std::move(staging)) {}
+    ~OverlappedProbeWrites();
+    OverlappedProbeWrites(const OverlappedProbeWrites&) = delete;
+    OverlappedProbeWrites& operator=(const OverlappedProbeWrites&) = delete;
+
+    void write(std::size_t index, ProbeMap map);
+    [[nodiscard]] std::vector<StagedProbe> finish();
+    // Seconds spent in the writes themselves (overlapping the bakes).
+    [[nodiscard]] double write_seconds() const { return write_seconds_; }
+
+private:
+    void wait_for_pending();
+
+    std::string staging_;
+    tbb::task_group writes_;
+    std::unique_ptr<ProbeMap> pending_map_; // the map being written
+    StagedProbe pending_;
+    bool has_pending_ = false;
+    std::exception_ptr error_;
+    double write_seconds_ = 0.0;
+    std::vector<StagedProbe> staged_;
+};
 
 // Finishes a staged bake: `manifest` must list one record per placement position, in order,
 // each of whose files is in the staging folder. Removes temporaries that killed writers left,
