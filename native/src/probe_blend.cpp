@@ -95,23 +95,35 @@ std::size_t candidates_around(const ProbeField& field, const glm::dvec3& point,
 // over a texel's, so as the eye reaches a probe the colour becomes that probe's lookup, the
 // image an eye at the probe gets (probes that saw the surface from elsewhere also placed its
 // texture with their own small depth errors). 0 when the probe sees the point too obliquely.
+// Split in two so that the arccosine is taken only for a probe that passed every test: facing()
+// is the cosine test, weight() the rest.
+struct SamplingWeight {
+    glm::dvec3 to_probe;
+    double r2 = 0.0;
+    double r = 0.0;
+    double cosine = 0.0;
+
+    SamplingWeight(const glm::dvec3& position, const glm::dvec3& point, const glm::dvec3& normal)
+        : to_probe(position - point), r2(glm::dot(to_probe, to_probe)) {
+        if (r2 > 0.0) {
+            r = std::sqrt(r2);
+            cosine = glm::dot(normal, to_probe) / r;
+        }
+    }
+    [[nodiscard]] bool facing(double min_cosine) const { return r2 > 0.0 && cosine >= min_cosine; }
+    [[nodiscard]] double weight(int resolution, const glm::dvec3& view) const {
+        const double n = static_cast<double>(resolution);
+        const double texel_angle = oct::kTexelAngleTimesN / n;
+        const double off_view = std::acos(std::clamp(-glm::dot(view, to_probe) / r, -1.0, 1.0));
+        const double angle = off_view + texel_angle;
+        return n * n * cosine / (r2 * angle * angle);
+    }
+};
+
 double sampling_weight(const glm::dvec3& position, int resolution, const glm::dvec3& point,
                        const glm::dvec3& normal, const glm::dvec3& view, double min_cosine) {
-    const glm::dvec3 to_probe = position - point;
-    const double r2 = glm::dot(to_probe, to_probe);
-    if (!(r2 > 0.0)) {
-        return 0.0;
-    }
-    const double r = std::sqrt(r2);
-    const double cosine = glm::dot(normal, to_probe) / r;
-    if (!(cosine >= min_cosine)) {
-        return 0.0;
-    }
-    const double n = static_cast<double>(resolution);
-    const double texel_angle = oct::kTexelAngleTimesN / n;
-    const double off_view = std::acos(std::clamp(-glm::dot(view, to_probe) / r, -1.0, 1.0));
-    const double angle = off_view + texel_angle;
-    return n * n * cosine / (r2 * angle * angle);
+    const SamplingWeight w(position, point, normal);
+    return w.facing(min_cosine) ? w.weight(resolution, view) : 0.0;
 }
 
 } // namespace
@@ -145,9 +157,8 @@ glm::vec3 blend_probes(const ProbeField& field, const glm::dvec3& point, const g
         if (!(r > settings.probe.eye_at_probe_distance) || !std::isfinite(r)) {
             continue;
         }
-        const double w =
-            sampling_weight(map.position, map.resolution, point, normal, view, kMinCosine);
-        if (!(w > 0.0)) {
+        const SamplingWeight sampling(map.position, point, normal);
+        if (!sampling.facing(kMinCosine)) {
             continue;
         }
         const oct::Texel texel = oct::texel_of_direction(glm::vec3(direction), map.resolution);
@@ -160,6 +171,10 @@ glm::vec3 blend_probes(const ProbeField& field, const glm::dvec3& point, const g
         const glm::dvec3 stored_normal(map.normal_at(i));
         if (glm::dot(stored_normal, direction) >= 0.0 || glm::dot(stored_normal, normal) <= 0.0) {
             continue; // the back of a surface, or another surface
+        }
+        const double w = sampling.weight(map.resolution, view);
+        if (!(w > 0.0)) {
+            continue;
         }
         seen[seen_count++] = {
             map.position,
