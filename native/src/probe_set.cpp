@@ -280,6 +280,10 @@ BakeSummary write_probe_set(const std::string& folder, ProbeSetManifest manifest
             summary.bake_seconds += seconds_since(start);
             writes.write(i, std::move(map));
         }
+        if (progress != nullptr) {
+            progress->begin_stage(
+                "writing probe " + std::to_string(count) + " of " + std::to_string(count), 1);
+        }
         const std::vector<StagedProbe> staged = writes.finish();
         summary.write_seconds = writes.write_seconds();
         for (const StagedProbe& probe : staged) {
