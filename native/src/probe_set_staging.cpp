@@ -3,6 +3,7 @@
 #include <chrono>
 #include <filesystem>
 #include <system_error>
+#include <utility>
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/known_space.hpp"
