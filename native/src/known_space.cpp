@@ -8,6 +8,7 @@
 #include <fstream>
 #include <iterator>
 #include <limits>
+#include <optional>
 #include <tuple>
 
 #include <tbb/parallel_for.h>
@@ -936,20 +937,49 @@ KnownSpaceMask KnownSpace::mask(double margin, double footprint_texels, int max_
             factor *= 2;
         }
         masks.surfaces = dense_mask(low, high, kSurfaceVoxel, factor);
-        for (std::size_t i = 0; i < surfaces_.size(); ++i) {
-            const SurfaceVoxel& v = surfaces_[i];
-            const std::array<std::int64_t, 3> at{v.x, v.y, v.z};
+        // A voxel sets the cube of its reach around it. Neighbours along a row (the voxels come
+        // sorted by z, y, x) with the same reach set the same rows, so their cubes are joined
+        // into one box first and each of its rows is set once: the same mask, where the cubes
+        // one by one were most of the mask's build (its first frame's).
+        struct Box {
+            std::int64_t y, z, x_low, x_high;
+            int reach;
+        };
+        const auto set_box = [&](const Box& box) {
+            const std::array<std::int64_t, 3> lo{box.x_low, box.y - box.reach, box.z - box.reach};
+            const std::array<std::int64_t, 3> hi{box.x_high, box.y + box.reach, box.z + box.reach};
             std::array<int, 3> from{};
             std::array<int, 3> to{};
             for (std::size_t a = 0; a < 3; ++a) {
-                from[a] = static_cast<int>((at[a] - reach[i] - low[a]) / factor);
-                to[a] = static_cast<int>((at[a] + reach[i] - low[a]) / factor);
+                from[a] = static_cast<int>((lo[a] - low[a]) / factor);
+                to[a] = static_cast<int>((hi[a] - low[a]) / factor);
             }
             for (int z = from[2]; z <= to[2]; ++z) {
                 for (int y = from[1]; y <= to[1]; ++y) {
                     masks.surfaces.set_run(from[0], to[0], y, z);
                 }
             }
+        };
+        std::optional<Box> box;
+        for (std::size_t i = 0; i < surfaces_.size(); ++i) {
+            const SurfaceVoxel& v = surfaces_[i];
+            const std::int64_t x_low = std::int64_t{v.x} - reach[i];
+            const std::int64_t x_high = std::int64_t{v.x} + reach[i];
+            // Joined where the runs overlap or touch: their union is one run, and so is its
+            // floor division into coarse voxels.
+            if (box && box->y == v.y && box->z == v.z && box->reach == reach[i] &&
+                x_low <= box->x_high + 1 && x_high >= box->x_low - 1) {
+                box->x_low = std::min(box->x_low, x_low);
+                box->x_high = std::max(box->x_high, x_high);
+                continue;
+            }
+            if (box) {
+                set_box(*box);
+            }
+            box = Box{v.y, v.z, x_low, x_high, reach[i]};
+        }
+        if (box) {
+            set_box(*box);
         }
         masks.coarse_surfaces = masks.surfaces.pooled(4);
     }
