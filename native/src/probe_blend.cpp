@@ -152,12 +152,12 @@ glm::vec3 blend_probes(const ProbeField& field, const glm::dvec3& point, const g
             seen[seen_count++] = {map.position, answered_radiance, std::max(w, 1e-30)};
             continue;
         }
-        const glm::dvec3 direction = point - map.position;
-        const double r = glm::length(direction);
+        const SamplingWeight sampling(map.position, point, normal);
+        const glm::dvec3 direction = -sampling.to_probe;
+        const double r = sampling.r; // 0 where r2 is not positive: skipped below as before
         if (!(r > settings.probe.eye_at_probe_distance) || !std::isfinite(r)) {
             continue;
         }
-        const SamplingWeight sampling(map.position, point, normal);
         if (!sampling.facing(kMinCosine)) {
             continue;
         }

@@ -165,17 +165,15 @@ void OverlappedProbeWrites::wait_for_pending() {
     if (error_) {
         std::rethrow_exception(std::exchange(error_, nullptr));
     }
-    if (has_pending_) {
+    if (pending_map_) {
         staged_.push_back(pending_);
-        has_pending_ = false;
         pending_map_.reset();
     }
 }
 
 void OverlappedProbeWrites::write(std::size_t index, ProbeMap map) {
     wait_for_pending();
-    pending_map_ = std::make_unique<ProbeMap>(std::move(map));
-    has_pending_ = true;
+    pending_map_.emplace(std::move(map));
     writes_.run([this, index] {
         try {
             const auto start = std::chrono::steady_clock::now();

@@ -7,7 +7,7 @@
 
 #include <cstddef>
 #include <exception>
-#include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -65,9 +65,8 @@ private:
 
     std::string staging_;
     tbb::task_group writes_;
-    std::unique_ptr<ProbeMap> pending_map_; // the map being written
+    std::optional<ProbeMap> pending_map_; // the map being written, until its write is collected
     StagedProbe pending_;
-    bool has_pending_ = false;
     std::exception_ptr error_;
     double write_seconds_ = 0.0;
     std::vector<StagedProbe> staged_;
