@@ -4,6 +4,7 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <mutex>
 #include <utility>
@@ -26,6 +27,10 @@ namespace {
 class TriedProbes {
 public:
     [[nodiscard]] bool worth_asking(std::size_t probe, double from) const {
+        // Most probes a ray considers were never asked: one bit test says so without a search.
+        if ((maybe_listed_ & bit_of(probe)) == 0) {
+            return true;
+        }
         for (std::size_t i = 0; i < count_; ++i) {
             if (entries_[i].first == probe) {
                 return from > entries_[i].second;
@@ -34,20 +39,29 @@ public:
         return true;
     }
     void remember(std::size_t probe, double free_until) {
-        for (std::size_t i = 0; i < count_; ++i) {
-            if (entries_[i].first == probe) {
-                entries_[i].second = free_until;
-                return;
+        if ((maybe_listed_ & bit_of(probe)) != 0) {
+            for (std::size_t i = 0; i < count_; ++i) {
+                if (entries_[i].first == probe) {
+                    entries_[i].second = free_until;
+                    return;
+                }
             }
         }
-        // Oldest entries make room: re-asking a probe is only wasted work, never wrong.
+        // Oldest entries make room: re-asking a probe is only wasted work, never wrong. (An
+        // evicted probe's bit stays set: a bit set in vain costs a search, never an answer.)
         entries_[next_] = {probe, free_until};
+        maybe_listed_ |= bit_of(probe);
         next_ = (next_ + 1) % entries_.size();
         count_ = std::min(count_ + 1, entries_.size());
     }
 
 private:
+    [[nodiscard]] static std::uint64_t bit_of(std::size_t probe) {
+        return std::uint64_t{1} << (probe & 63U);
+    }
+
     std::array<std::pair<std::size_t, double>, 32> entries_{};
+    std::uint64_t maybe_listed_ = 0; // bit (probe mod 64) set for every probe listed
     std::size_t count_ = 0;
     std::size_t next_ = 0;
 };
