@@ -11,6 +11,10 @@
 #include <utility>
 #include <vector>
 
+#if defined(__x86_64__)
+#include <immintrin.h>
+#endif
+
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
 #include <glm/vector_relational.hpp>
@@ -147,22 +151,144 @@ struct SortingNetwork {
 // comparison. Candidates are collected without branching and the k smallest picked from them
 // at the end: inserting each into a sorted list as it came cost a mispredicted branch or two
 // per candidate, two fifths of the search's time.
+// Keys a collect may write past the last it keeps (collect_avx2 writes four at a time).
+constexpr std::size_t kCollectPadding = 8;
+
+// One candidate's key: its squared distance's bits above its index, so that keys order by
+// distance, then index.
+inline std::uint64_t neighbour_key(float d2, std::uint32_t q) {
+    return (std::uint64_t{std::bit_cast<std::uint32_t>(d2)} << 32) | q;
+}
+
+std::size_t collect_scalar(const glm::vec3* positions, std::uint32_t begin, std::uint32_t end,
+                           const glm::vec3& p, float limit, std::uint64_t* scratch,
+                           std::size_t count) {
+    for (std::uint32_t q = begin; q < end; ++q) {
+        const glm::vec3 d = positions[q] - p;
+        const float d2 = glm::dot(d, d);
+        scratch[count] = neighbour_key(d2, q);
+        count += d2 <= limit ? 1 : 0;
+    }
+    return count;
+}
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#define LFPROBE_COLLECT_AVX2 1
+// Asked once, when the library loads (after the CPU's features are read: __builtin_cpu_init).
+const bool kHasAvx2 = [] {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") != 0;
+}();
+static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "points are read as packed floats");
+
+// For each mask of four 64-bit keys, the 32-bit lanes that move the masked keys to the front,
+// in order.
+struct PackLanes {
+    alignas(32) std::int32_t lanes[8];
+};
+const std::array<PackLanes, 16> kPackKeys = [] {
+    std::array<PackLanes, 16> table{};
+    for (unsigned mask = 0; mask < 16; ++mask) {
+        int to = 0;
+        for (int key = 0; key < 4; ++key) {
+            if ((mask >> key) & 1U) {
+                table[mask].lanes[2 * to] = 2 * key;
+                table[mask].lanes[2 * to + 1] = 2 * key + 1;
+                ++to;
+            }
+        }
+    }
+    return table;
+}();
+
+// collect_scalar eight points at a time: the same squared distances bit for bit (the same
+// products and sums in the same order, no fused multiply-add), the same keys in the same order.
+// The points are stored x y z x y z ...: three 8-float loads hold eight of them, and five
+// shuffles sort their coordinates into an x, a y and a z vector. Most candidates lie beyond
+// the limit; the keys of those within are packed to the front without a branch.
+__attribute__((target("avx2"))) std::size_t
+collect_avx2(const glm::vec3* positions, std::uint32_t begin, std::uint32_t end,
+             std::uint32_t available, const glm::vec3& p, float limit, std::uint64_t* scratch,
+             std::size_t count) {
+    const __m256 px = _mm256_set1_ps(p.x);
+    const __m256 py = _mm256_set1_ps(p.y);
+    const __m256 pz = _mm256_set1_ps(p.z);
+    const __m256 lim = _mm256_set1_ps(limit);
+    const __m256i lane_numbers = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    const auto pack_lanes = [](unsigned mask) {
+        return _mm256_load_si256(reinterpret_cast<const __m256i*>(kPackKeys[mask].lanes));
+    };
+    std::uint32_t q = begin;
+    // The last eight may reach past `end` (never past `available`): lanes past it are left out.
+    for (; q < end && q + 8 <= available; q += 8) {
+        const unsigned kept = end - q >= 8 ? 0xFFU : (1U << (end - q)) - 1U;
+        const float* f = &positions[q].x;
+        // Lanes, low 128 bits | high 128 bits:
+        // a: x0 y0 z0 x1 | x4 y4 z4 x5,  b: y1 z1 x2 y2 | y5 z5 x6 y6,
+        // c: z2 x3 y3 z3 | z6 x7 y7 z7.
+        const __m256 a =
+            _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(f)), _mm_loadu_ps(f + 12), 1);
+        const __m256 b = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(f + 4)),
+                                              _mm_loadu_ps(f + 16), 1);
+        const __m256 c = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(f + 8)),
+                                              _mm_loadu_ps(f + 20), 1);
+        // x2 y2 x3 y3 and y0 z0 y1 z1 (per 128-bit half), then each coordinate's four.
+        const __m256 xy = _mm256_shuffle_ps(b, c, _MM_SHUFFLE(2, 1, 3, 2));
+        const __m256 yz = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(1, 0, 2, 1));
+        const __m256 x = _mm256_shuffle_ps(a, xy, _MM_SHUFFLE(2, 0, 3, 0));
+        const __m256 y = _mm256_shuffle_ps(yz, xy, _MM_SHUFFLE(3, 1, 2, 0));
+        const __m256 z = _mm256_shuffle_ps(yz, c, _MM_SHUFFLE(3, 0, 3, 1));
+        const __m256 dx = _mm256_sub_ps(x, px);
+        const __m256 dy = _mm256_sub_ps(y, py);
+        const __m256 dz = _mm256_sub_ps(z, pz);
+        const __m256 d2 = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)),
+                                        _mm256_mul_ps(dz, dz));
+        const unsigned within =
+            kept & static_cast<unsigned>(_mm256_movemask_ps(_mm256_cmp_ps(d2, lim, _CMP_LE_OQ)));
+        // The keys, index in the low half: lanes 0-3 and 4-7, each packed to the front of its
+        // four by the mask's bits and written whole (the store may run past what is kept; the
+        // next write or the caller's count covers it): no branch on which lanes are within.
+        const __m256i index =
+            _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(q)), lane_numbers);
+        const __m256i bits = _mm256_castps_si256(d2);
+        const __m256i low = _mm256_unpacklo_epi32(index, bits);  // keys 0 1 | 4 5
+        const __m256i high = _mm256_unpackhi_epi32(index, bits); // keys 2 3 | 6 7
+        const __m256i first = _mm256_permute2x128_si256(low, high, 0x20);
+        const __m256i second = _mm256_permute2x128_si256(low, high, 0x31);
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(scratch + count),
+                            _mm256_permutevar8x32_epi32(first, pack_lanes(within & 15U)));
+        count += static_cast<std::size_t>(std::popcount(within & 15U));
+        _mm256_storeu_si256(reinterpret_cast<__m256i*>(scratch + count),
+                            _mm256_permutevar8x32_epi32(second, pack_lanes(within >> 4U)));
+        count += static_cast<std::size_t>(std::popcount(within >> 4U));
+    }
+    return collect_scalar(positions, std::min(q, end), end, p, limit, scratch, count);
+}
+#else
+#define LFPROBE_COLLECT_AVX2 0
+#endif
+
 class NearestSet {
 public:
     explicit NearestSet(std::size_t k) : capacity_(k) { keys_.reserve(k); }
 
-    // Collects, from the sorted points [begin, end), those within `limit` (squared) of `p`;
-    // `scratch` must hold end - begin more keys past `count`.
+    // Collects, from the sorted points [begin, end) of the `available` in `positions`, those
+    // within `limit` (squared) of `p`, as keys (squared distance's bits, index) in index order;
+    // `scratch` must hold end - begin + kCollectPadding more keys past `count`. Eight points at
+    // a time where the CPU has AVX2 (collect_avx2): this loop was most of the estimate's
+    // instructions.
     static std::size_t collect(const glm::vec3* positions, std::uint32_t begin, std::uint32_t end,
-                               const glm::vec3& p, float limit, std::uint64_t* scratch,
-                               std::size_t count) {
-        for (std::uint32_t q = begin; q < end; ++q) {
-            const glm::vec3 d = positions[q] - p;
-            const float d2 = glm::dot(d, d);
-            scratch[count] = (std::uint64_t{std::bit_cast<std::uint32_t>(d2)} << 32) | q;
-            count += d2 <= limit ? 1 : 0;
+                               std::uint32_t available, const glm::vec3& p, float limit,
+                               std::uint64_t* scratch, std::size_t count, bool vectors) {
+#if LFPROBE_COLLECT_AVX2
+        if (vectors && kHasAvx2) {
+            return collect_avx2(positions, begin, end, available, p, limit, scratch, count);
         }
-        return count;
+#else
+        (void)available;
+        (void)vectors;
+#endif
+        return collect_scalar(positions, begin, end, p, limit, scratch, count);
     }
 
     // Keeps the k smallest of the `count` collected keys (all of them when fewer), sorted. Up to
@@ -205,9 +331,15 @@ public:
         keys_.assign(scratch, scratch + kept);
     }
 
-    [[nodiscard]] std::size_t size() const { return keys_.size(); }
-    [[nodiscard]] std::size_t capacity() const { return capacity_; }
-    [[nodiscard]] bool full() const { return keys_.size() == capacity_; }
+    [[nodiscard]] std::size_t size() const {
+        return keys_.size();
+    }
+    [[nodiscard]] std::size_t capacity() const {
+        return capacity_;
+    }
+    [[nodiscard]] bool full() const {
+        return keys_.size() == capacity_;
+    }
     [[nodiscard]] float d2(std::size_t q) const {
         return std::bit_cast<float>(static_cast<std::uint32_t>(keys_[q] >> 32));
     }
@@ -226,8 +358,8 @@ private:
 // is the whole cube. `runs` is scratch space.
 class BlockSearch {
 public:
-    BlockSearch(const morton::SortedPoints& sorted, const glm::vec3* positions)
-        : sorted_(sorted), positions_(positions) {}
+    BlockSearch(const morton::SortedPoints& sorted, const glm::vec3* positions, bool vectors)
+        : sorted_(sorted), positions_(positions), vectors_(vectors) {}
 
     // The runs of sorted points in the block of level `shift` around the cell `cell`, the cell
     // itself first, then its face, edge and corner neighbours: the nearest candidates come
@@ -300,11 +432,13 @@ public:
             if (gap2 > limit) {
                 continue;
             }
-            if (scratch_.size() < count + (run.end - run.begin)) {
-                scratch_.resize(2 * (count + (run.end - run.begin)));
+            const std::size_t room = count + (run.end - run.begin) + kCollectPadding;
+            if (scratch_.size() < room) {
+                scratch_.resize(2 * room);
             }
-            count = NearestSet::collect(positions_, run.begin, run.end, p, limit, scratch_.data(),
-                                        count);
+            count = NearestSet::collect(positions_, run.begin, run.end,
+                                        static_cast<std::uint32_t>(sorted_.keys.size()), p, limit,
+                                        scratch_.data(), count, vectors_);
         }
         nearest.settle(scratch_.data(), count);
     }
@@ -378,6 +512,7 @@ private:
     };
     const morton::SortedPoints& sorted_;
     const glm::vec3* positions_; // the points in sorted order
+    bool vectors_;               // LocalGeometryOptions::vector_instructions
     std::vector<Run> runs_;
     std::vector<std::uint64_t> scratch_; // the candidates of one search
     struct KnownRun {
@@ -610,7 +745,7 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
             if (progress != nullptr) {
                 progress->throw_if_cancelled();
             }
-            BlockSearch block(sorted, positions.get());
+            BlockSearch block(sorted, positions.get(), options.vector_instructions);
             NearestSet nearest(k);
             // Neighbouring queries have k-th distances alike: 1.5 times the last one's squared
             // distance (1.22 times the distance) takes in about 1.5 k candidates on a surface

@@ -2,6 +2,7 @@
 // search must find exactly the k nearest points, wherever the density changes.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 #include <utility>
 #include <vector>
@@ -91,6 +92,40 @@ TEST(LocalGeometry, NormalsAndSpacingAreTheSameForAnyThreadCount) {
     ASSERT_EQ(many.spacing, one.spacing);
     ASSERT_EQ(many.normals, one.normals);
     ASSERT_EQ(many.spatial_order, one.spatial_order);
+}
+
+// The candidates compared eight at a time (AVX2, where the CPU has it) or one at a time: the
+// same neighbours, so the same normals, spacing and edges bit for bit, on the uneven cloud (a
+// density jump, a lone cluster, duplicates) and on clouds so small that every run of
+// candidates ends inside a group of eight, or at the cloud's last point.
+TEST(LocalGeometry, ComparingCandidatesEightAtATimeChangesNothing) {
+    std::vector<PointCloud> clouds{uneven_cloud()};
+    std::mt19937 random(3);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    for (const int size : {4, 7, 8, 9, 15, 17, 40}) {
+        PointCloud small;
+        for (int i = 0; i < size; ++i) {
+            small.positions.push_back({u(random), u(random), 0.05f * u(random)});
+            small.scan_index.push_back(0);
+        }
+        small.scans.push_back(
+            ScanSource{"small", small.positions.size(), glm::dvec3(0, 0, 2), true});
+        clouds.push_back(small);
+    }
+    for (const PointCloud& cloud : clouds) {
+        LocalGeometryOptions one_at_a_time;
+        one_at_a_time.vector_instructions = false;
+        const LocalGeometry vectors = estimate_local_geometry(cloud, {});
+        const LocalGeometry scalar = estimate_local_geometry(cloud, one_at_a_time);
+        ASSERT_EQ(vectors.spacing, scalar.spacing) << cloud.size() << " points";
+        ASSERT_EQ(vectors.normals, scalar.normals) << cloud.size() << " points";
+        ASSERT_EQ(vectors.oriented, scalar.oriented) << cloud.size() << " points";
+        ASSERT_EQ(vectors.spatial_order, scalar.spatial_order) << cloud.size() << " points";
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            ASSERT_EQ(std::memcmp(&vectors.edges[i], &scalar.edges[i], sizeof(SurfaceEdge)), 0)
+                << cloud.size() << " points, point " << i;
+        }
+    }
 }
 
 namespace {
