@@ -23,47 +23,30 @@ namespace lfprobe {
 namespace {
 
 // Probes a ray already asked, and how far each proved the ray free: asking again from no
-// further on would give the same UNKNOWN.
+// further on would give the same UNKNOWN. One slot per probe index mod 64, looked up directly
+// (a ray of a partial scan asks the same few probes again and again): two probes of one ray
+// that share a slot evict each other, and re-asking a probe is only wasted work, never wrong.
 class TriedProbes {
 public:
     [[nodiscard]] bool worth_asking(std::size_t probe, double from) const {
-        // Most probes a ray considers were never asked: one bit test says so without a search.
-        if ((maybe_listed_ & bit_of(probe)) == 0) {
-            return true;
-        }
-        for (std::size_t i = 0; i < count_; ++i) {
-            if (entries_[i].first == probe) {
-                return from > entries_[i].second;
-            }
-        }
-        return true;
+        const std::size_t slot = probe & 63U;
+        return ((listed_ >> slot) & 1U) == 0 || slots_[slot].probe != probe ||
+               from > slots_[slot].free_until;
     }
     void remember(std::size_t probe, double free_until) {
-        if ((maybe_listed_ & bit_of(probe)) != 0) {
-            for (std::size_t i = 0; i < count_; ++i) {
-                if (entries_[i].first == probe) {
-                    entries_[i].second = free_until;
-                    return;
-                }
-            }
-        }
-        // Oldest entries make room: re-asking a probe is only wasted work, never wrong. (An
-        // evicted probe's bit stays set: a bit set in vain costs a search, never an answer.)
-        entries_[next_] = {probe, free_until};
-        maybe_listed_ |= bit_of(probe);
-        next_ = (next_ + 1) % entries_.size();
-        count_ = std::min(count_ + 1, entries_.size());
+        const std::size_t slot = probe & 63U;
+        slots_[slot] = {probe, free_until};
+        listed_ |= std::uint64_t{1} << slot;
     }
 
 private:
-    [[nodiscard]] static std::uint64_t bit_of(std::size_t probe) {
-        return std::uint64_t{1} << (probe & 63U);
-    }
-
-    std::array<std::pair<std::size_t, double>, 32> entries_{};
-    std::uint64_t maybe_listed_ = 0; // bit (probe mod 64) set for every probe listed
-    std::size_t count_ = 0;
-    std::size_t next_ = 0;
+    struct Entry {
+        std::size_t probe;
+        double free_until;
+    };
+    // Read only where listed_ has the slot's bit: left unset, as most rays use a few.
+    std::array<Entry, 64> slots_;
+    std::uint64_t listed_ = 0;
 };
 
 // A probe's coarse levels down to `coarsest`. They bound what the trace reads: the packed
