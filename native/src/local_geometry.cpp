@@ -144,13 +144,6 @@ struct SortingNetwork {
     }
 };
 
-// The k nearest sorted points to one query, ascending by (squared distance, sorted index):
-// ties go to the smaller index, so the set and its order do not depend on the order the
-// candidates are offered in. A candidate is one 64-bit key, the distance's bits above the
-// index (a non-negative float's bits order as the float does), so that order is one integer
-// comparison. Candidates are collected without branching and the k smallest picked from them
-// at the end: inserting each into a sorted list as it came cost a mispredicted branch or two
-// per candidate, two fifths of the search's time.
 // Keys a collect may write past the last it keeps (collect_avx2 writes four at a time).
 constexpr std::size_t kCollectPadding = 8;
 
@@ -186,6 +179,7 @@ static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "points are read as packed
 struct PackLanes {
     alignas(32) std::int32_t lanes[8];
 };
+static_assert(sizeof(PackLanes) == sizeof(__m256i));
 const std::array<PackLanes, 16> kPackKeys = [] {
     std::array<PackLanes, 16> table{};
     for (unsigned mask = 0; mask < 16; ++mask) {
@@ -215,9 +209,8 @@ collect_avx2(const glm::vec3* positions, std::uint32_t begin, std::uint32_t end,
     const __m256 pz = _mm256_set1_ps(p.z);
     const __m256 lim = _mm256_set1_ps(limit);
     const __m256i lane_numbers = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
-    const auto pack_lanes = [](unsigned mask) {
-        return _mm256_load_si256(reinterpret_cast<const __m256i*>(kPackKeys[mask].lanes));
-    };
+    // Entry m: the permutation for mask m (each 32 bytes, aligned).
+    const auto* pack_table = reinterpret_cast<const __m256i*>(kPackKeys.data());
     std::uint32_t q = begin;
     // The last eight may reach past `end` (never past `available`): lanes past it are left out.
     for (; q < end && q + 8 <= available; q += 8) {
@@ -255,11 +248,13 @@ collect_avx2(const glm::vec3* positions, std::uint32_t begin, std::uint32_t end,
         const __m256i high = _mm256_unpackhi_epi32(index, bits); // keys 2 3 | 6 7
         const __m256i first = _mm256_permute2x128_si256(low, high, 0x20);
         const __m256i second = _mm256_permute2x128_si256(low, high, 0x31);
+        const __m256i pack_first = _mm256_load_si256(pack_table + (within & 15U));
+        const __m256i pack_second = _mm256_load_si256(pack_table + (within >> 4U));
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(scratch + count),
-                            _mm256_permutevar8x32_epi32(first, pack_lanes(within & 15U)));
+                            _mm256_permutevar8x32_epi32(first, pack_first));
         count += static_cast<std::size_t>(std::popcount(within & 15U));
         _mm256_storeu_si256(reinterpret_cast<__m256i*>(scratch + count),
-                            _mm256_permutevar8x32_epi32(second, pack_lanes(within >> 4U)));
+                            _mm256_permutevar8x32_epi32(second, pack_second));
         count += static_cast<std::size_t>(std::popcount(within >> 4U));
     }
     return collect_scalar(positions, std::min(q, end), end, p, limit, scratch, count);
@@ -268,6 +263,13 @@ collect_avx2(const glm::vec3* positions, std::uint32_t begin, std::uint32_t end,
 #define LFPROBE_COLLECT_AVX2 0
 #endif
 
+// The k nearest sorted points to one query, ascending by (squared distance, sorted index):
+// ties go to the smaller index, so the set and its order do not depend on the order the
+// candidates are offered in. A candidate is one 64-bit key, the distance's bits above the
+// index (a non-negative float's bits order as the float does), so that order is one integer
+// comparison. Candidates are collected without branching and the k smallest picked from them
+// at the end: inserting each into a sorted list as it came cost a mispredicted branch or two
+// per candidate, two fifths of the search's time.
 class NearestSet {
 public:
     explicit NearestSet(std::size_t k) : capacity_(k) { keys_.reserve(k); }
