@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/json_input.hpp"
 
 namespace lfprobe {
 
@@ -18,10 +19,6 @@ using nlohmann::json;
 
 constexpr int kMaxMoves = 4;
 constexpr double kLooseMaxMove = 0.25;
-
-json vec_json(const glm::dvec3& v) {
-    return json::array({v.x, v.y, v.z});
-}
 
 // Inside and too close by class; a useful probe that sees much of its sphere unknown may see
 // more a little further on (a probe on a wall's plane, with the unscanned side behind it).
@@ -72,8 +69,8 @@ json ProbePlan::to_json(const glm::dvec3& world_offset) const {
         if (std::isfinite(p.classification.nearest_surface)) {
             c["nearest_surface"] = p.classification.nearest_surface;
         }
-        out.push_back(json{{"position", vec_json(world_offset + p.position)},
-                           {"original", vec_json(world_offset + p.original)},
+        out.push_back(json{{"position", json_of(world_offset + p.position)},
+                           {"original", json_of(world_offset + p.original)},
                            {"moved_by", glm::length(p.position - p.original)},
                            {"resolution", p.resolution},
                            {"found", probe_class_name(p.found)},

@@ -21,10 +21,6 @@ using nlohmann::json;
 
 namespace {
 
-json vec_json(const glm::dvec3& v) {
-    return json::array({v.x, v.y, v.z});
-}
-
 glm::dvec3 vec_from(const json& j, const std::string& what, const std::string& where) {
     if (!j.is_array() || j.size() != 3 || !j[0].is_number() || !j[1].is_number() ||
         !j[2].is_number()) {
@@ -54,7 +50,7 @@ std::string probe_file_name(std::size_t index) {
 
 json probe_record_json(const ProbeRecord& p) {
     return json{{"file", p.file},
-                {"position", vec_json(p.position)},
+                {"position", json_of(p.position)},
                 {"resolution", p.resolution},
                 {"coverage", coverage_json(p.coverage)},
                 {"memory_bytes", p.memory_bytes}};
@@ -64,12 +60,12 @@ json ProbeSetManifest::to_json() const {
     json j;
     j["format"] = "lfprobe-probe-set";
     j["format_version"] = format_version;
-    j["world_offset"] = vec_json(world_offset);
+    j["world_offset"] = json_of(world_offset);
     j["frame"] = "probe positions are local: world = world_offset + position";
     if (placement.is_grid) {
         j["layout"] = "grid";
-        j["grid"] = json{{"origin", vec_json(placement.grid.origin)},
-                         {"spacing", vec_json(placement.grid.spacing)},
+        j["grid"] = json{{"origin", json_of(placement.grid.origin)},
+                         {"spacing", json_of(placement.grid.spacing)},
                          {"counts", placement.grid.counts}};
     } else {
         j["layout"] = "positions";

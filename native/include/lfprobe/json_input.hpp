@@ -6,6 +6,7 @@
 #include <istream>
 #include <string>
 
+#include <glm/vec3.hpp>
 #include <nlohmann/json.hpp>
 
 namespace lfprobe {
@@ -22,5 +23,10 @@ inline constexpr int kMaxJsonDepth = 64;
 // may be missing), IoError when it cannot be read, InputError for invalid or too deep JSON.
 [[nodiscard]] nlohmann::json read_json_file(const std::string& path, const std::string& what,
                                             const std::string& missing_hint = "");
+
+// A point or vector as lfprobe's JSON files hold one: [x, y, z].
+[[nodiscard]] inline nlohmann::json json_of(const glm::dvec3& v) {
+    return nlohmann::json::array({v.x, v.y, v.z});
+}
 
 } // namespace lfprobe
