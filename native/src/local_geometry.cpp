@@ -23,6 +23,8 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/morton.hpp"
 
+#include "few_keys_sort.hpp"
+
 namespace lfprobe {
 
 namespace {
@@ -97,52 +99,6 @@ void split_into_leaves(const std::vector<std::uint64_t>& keys, std::uint32_t beg
         b = e;
     }
 }
-
-// Calls visit(a, b) for each compare-exchange of Batcher's odd-even merge sort of n elements (n a
-// power of two), in order.
-template <class Visit>
-constexpr void for_each_batcher_pair(std::size_t n, Visit&& visit) {
-    for (std::size_t p = 1; p < n; p <<= 1) {
-        for (std::size_t k = p; k >= 1; k >>= 1) {
-            for (std::size_t j = k % p; j + k < n; j += 2 * k) {
-                for (std::size_t i = 0; i < std::min(k, n - j - k); ++i) {
-                    if ((i + j) / (2 * p) == (i + j + k) / (2 * p)) {
-                        visit(i + j, i + j + k);
-                    }
-                }
-            }
-        }
-    }
-}
-
-// That sort as a fixed sequence of compare-exchanges: no branch on the data.
-template <std::size_t N>
-struct SortingNetwork {
-    static constexpr std::size_t kPairs = [] {
-        std::size_t pairs = 0;
-        for_each_batcher_pair(N, [&](std::size_t, std::size_t) { ++pairs; });
-        return pairs;
-    }();
-    static constexpr std::array<std::pair<std::uint8_t, std::uint8_t>, kPairs> kComparators = [] {
-        std::array<std::pair<std::uint8_t, std::uint8_t>, kPairs> out{};
-        std::size_t at = 0;
-        for_each_batcher_pair(N, [&](std::size_t a, std::size_t b) {
-            out[at++] = {static_cast<std::uint8_t>(a), static_cast<std::uint8_t>(b)};
-        });
-        return out;
-    }();
-
-    // Sorts v[0, N) ascending.
-    static void sort(std::uint64_t* v) {
-#pragma GCC unroll 256
-        for (std::size_t c = 0; c < kPairs; ++c) {
-            const std::uint64_t a = v[kComparators[c].first];
-            const std::uint64_t b = v[kComparators[c].second];
-            v[kComparators[c].first] = a < b ? a : b;
-            v[kComparators[c].second] = a < b ? b : a;
-        }
-    }
-};
 
 // Keys a collect may write past the last it keeps (collect_avx2 writes four at a time).
 constexpr std::size_t kCollectPadding = 8;
@@ -272,7 +228,8 @@ collect_avx2(const glm::vec3* positions, std::uint32_t begin, std::uint32_t end,
 // per candidate, two fifths of the search's time.
 class NearestSet {
 public:
-    explicit NearestSet(std::size_t k) : capacity_(k) { keys_.reserve(k); }
+    explicit NearestSet(std::size_t k)
+        : capacity_(k), keys_(std::max(k, few_keys_sort::kMaxKeys)) {}
 
     // Collects, from the sorted points [begin, end) of the `available` in `positions`, those
     // within `limit` (squared) of `p`, as keys (squared distance's bits, index) in index order;
@@ -294,24 +251,19 @@ public:
     }
 
     // Keeps the k smallest of the `count` collected keys (all of them when fewer), sorted. Up to
-    // 32 keys (nine queries in ten collect 8 to 31) go through a sorting network, padded with
-    // the largest key: its compare-exchanges branch on nothing, where inserting each key into
-    // a sorted run mispredicted where the run ended, a quarter of the estimate's time. More
-    // keys (a second search without a limit) are each inserted into a sorted run at the front
-    // of `scratch` (where it has been read already), or turned away at one comparison once
-    // the run holds k and the key is past its last. The keys are distinct (their indices
-    // differ), so both give the same k keys in the same order.
-    void settle(std::uint64_t* scratch, std::size_t count) {
+    // 32 keys (nine queries in ten collect 8 to 31) go through a sorting network (few_keys_sort:
+    // AVX2 where `vectors`): its compare-exchanges branch on nothing, where inserting each key
+    // into a sorted run mispredicted where the run ended, a quarter of the estimate's time;
+    // `scratch` must be readable for 32 keys. More keys (a second search without a limit) are
+    // each inserted into a sorted run at the front of `scratch` (where it has been read
+    // already), or turned away at one comparison once the run holds k and the key is past its
+    // last. The keys are distinct (their indices differ), so both give the same k keys in the
+    // same order.
+    void settle(std::uint64_t* scratch, std::size_t count, bool vectors) {
         const std::size_t kept = std::min(count, capacity_);
-        if (count <= 32) {
-            std::uint64_t v[32];
-            std::fill(std::copy(scratch, scratch + count, v), v + 32, ~std::uint64_t{0});
-            if (count <= 16) {
-                SortingNetwork<16>::sort(v);
-            } else {
-                SortingNetwork<32>::sort(v);
-            }
-            keys_.assign(v, v + kept);
+        if (count <= few_keys_sort::kMaxKeys) {
+            few_keys_sort::smallest_sorted(scratch, count, kept, keys_.data(), vectors);
+            size_ = kept;
             return;
         }
         std::size_t size = 0;
@@ -330,17 +282,18 @@ public:
             }
             scratch[at] = key;
         }
-        keys_.assign(scratch, scratch + kept);
+        std::copy(scratch, scratch + kept, keys_.begin());
+        size_ = kept;
     }
 
     [[nodiscard]] std::size_t size() const {
-        return keys_.size();
+        return size_;
     }
     [[nodiscard]] std::size_t capacity() const {
         return capacity_;
     }
     [[nodiscard]] bool full() const {
-        return keys_.size() == capacity_;
+        return size_ == capacity_;
     }
     [[nodiscard]] float d2(std::size_t q) const {
         return std::bit_cast<float>(static_cast<std::uint32_t>(keys_[q] >> 32));
@@ -351,7 +304,8 @@ public:
 
 private:
     std::size_t capacity_;
-    std::vector<std::uint64_t> keys_;
+    std::vector<std::uint64_t> keys_; // the first size_ are the nearest; room for a whole sort
+    std::size_t size_ = 0;
 };
 
 // Searches the k nearest points of the sorted point `j` among the 3×3×3 block of cells of
@@ -361,7 +315,8 @@ private:
 class BlockSearch {
 public:
     BlockSearch(const morton::SortedPoints& sorted, const glm::vec3* positions, bool vectors)
-        : sorted_(sorted), positions_(positions), vectors_(vectors) {}
+        : sorted_(sorted), positions_(positions), vectors_(vectors),
+          scratch_(2 * few_keys_sort::kMaxKeys) {}
 
     // The runs of sorted points in the block of level `shift` around the cell `cell`, the cell
     // itself first, then its face, edge and corner neighbours: the nearest candidates come
@@ -442,7 +397,7 @@ public:
                                         static_cast<std::uint32_t>(sorted_.keys.size()), p, limit,
                                         scratch_.data(), count, vectors_);
         }
-        nearest.settle(scratch_.data(), count);
+        nearest.settle(scratch_.data(), count, vectors_);
     }
 
     // The k nearest within the block, at first within `guess` (squared; the previous query's
@@ -516,7 +471,7 @@ private:
     const glm::vec3* positions_; // the points in sorted order
     bool vectors_;               // LocalGeometryOptions::vector_instructions
     std::vector<Run> runs_;
-    std::vector<std::uint64_t> scratch_; // the candidates of one search
+    std::vector<std::uint64_t> scratch_; // the candidates of one search (settle reads 32)
     struct KnownRun {
         std::uint64_t cell_key = 0;
         int shift = -1; // none yet
