@@ -3,11 +3,13 @@
 // surface (a disocclusion) continues the surface behind; any other hole is filled from a pull
 // pyramid of the measured texels around it.
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <limits>
 #include <memory>
+#include <numbers>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -235,15 +237,23 @@ bool within_near_surface(const ProbeMap& map, const std::vector<std::uint32_t>& 
     return 2 * within >= hole.size();
 }
 
+// Whether texel u is a disocclusion's background border: a measured surface at least as far as
+// the split between its near and far surfaces.
+bool is_background(const ProbeMap& map, std::uint32_t u, float split) {
+    return map.state(u) == TexelState::Surface && map.distance[u] >= split;
+}
+
 // Fills a disocclusion hole from its background side only, layer by layer inward (onion
 // peeling): a texel takes the mean colour and normal of its neighbours already known (the
 // background border, then earlier layers), and the distance where its ray meets their
 // surface planes, so a plane behind the near surface continues under it. Layer k is inferred
 // with confidence 2^-(1 + floor(log2 k)): as the pull-push's level, halving as the fill
-// reaches twice as far. Reads only texels of earlier layers, so the order is fixed.
-void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole, float split,
-                          std::vector<std::int32_t>& layer_of) {
+// reaches twice as far. Reads only texels of earlier layers, so the order is fixed. Returns the
+// number of layers (about half the hole's width).
+std::int32_t fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole,
+                                  float split, std::vector<std::int32_t>& layer_of) {
     const int n = map.resolution;
+    std::int32_t layers = 0;
     struct Fill {
         float distance;
         glm::vec3 rgb;
@@ -255,11 +265,7 @@ void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole,
                                     n);
     };
     fill_hole_in_layers(
-        hole, n, n, layer_of,
-        // The background border.
-        [&](std::uint32_t u) {
-            return map.state(u) == TexelState::Surface && map.distance[u] >= split;
-        },
+        hole, n, n, layer_of, [&](std::uint32_t u) { return is_background(map, u, split); },
         [&](std::uint32_t t, auto&& known) {
             const glm::vec3 dir = direction_of(t);
             Fill f{0.0f, glm::vec3(0.0f), glm::vec3(0.0f)};
@@ -293,7 +299,85 @@ void fill_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole,
             const float confidence =
                 std::ldexp(1.0f, -static_cast<int>(std::bit_width(static_cast<unsigned>(layer))));
             map.set_surface(t, f.distance, f.rgb, f.normal, confidence);
+            layers = std::max(layers, layer);
         });
+    return layers;
+}
+
+// Gives a disocclusion filled by fill_from_background the smoothest colours its background
+// border allows: each texel the mean of its neighbours' (8, the background border's fixed,
+// near-surface texels left out), the discrete Laplace equation, solved by successive
+// over-relaxation from the layers' colours. The layers carried the nearest border texel's
+// colour straight in, so a skirting board's brown grew up a white wall in a streak; no scan saw
+// what lies there, and the harmonic blend of everything around it is the guess with the least
+// squared error on the demo's views (eye at a probe: 25.5 -> 26.6 dB). A linear ramp of colour
+// along the border is continued exactly. Sweeps the hole in texel order, so the result does
+// not depend on threads; writes only the hole's colours and reads only it and its border, so
+// holes can be blended at once.
+void blend_colours_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole_texels,
+                                   float split, std::int32_t layers) {
+    const int n = map.resolution;
+    std::vector<std::uint32_t> hole = hole_texels;
+    std::sort(hole.begin(), hole.end());
+    const std::size_t count = hole.size();
+    // Per texel: the sum of its fixed (background) neighbours' colours, the reciprocal of the
+    // number of neighbours it averages, and its neighbours in the hole.
+    struct Stencil {
+        glm::vec3 fixed_sum{0.0f};
+        float reciprocal = 0.0f;
+        std::uint32_t inside = 0;
+        std::array<std::uint32_t, 8> in_hole{};
+    };
+    std::vector<Stencil> stencils(count);
+    std::vector<glm::vec3> colour(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        Stencil& s = stencils[i];
+        int neighbours = 0;
+        for_each_neighbour(hole[i], n, n, [&](std::uint32_t u) {
+            const auto at = std::lower_bound(hole.begin(), hole.end(), u);
+            if (at != hole.end() && *at == u) {
+                s.in_hole[s.inside++] = static_cast<std::uint32_t>(at - hole.begin());
+                ++neighbours;
+            } else if (is_background(map, u, split)) {
+                s.fixed_sum += map.radiance_at(u);
+                ++neighbours;
+            }
+        });
+        s.reciprocal = 1.0f / static_cast<float>(neighbours); // every texel has a neighbour
+        colour[i] = map.radiance_at(hole[i]);
+    }
+    // The over-relaxation that converges fastest on a strip 2 × layers wide; the sweeps stop
+    // when no colour moves by more than kSettled (a tenth of a half float's step at 1), or
+    // after kMaxSweeps. Most holes settle in 20 to 150 sweeps; a long strip reached by the
+    // background at its ends only would take its length (804 for the largest of a demo probe,
+    // 314 layers, where all that probe's other holes took 170 between them), and stops part way
+    // from the layers' colours to the blend.
+    const double width = 2.0 * static_cast<double>(std::max(layers, 1)) + 1.0;
+    const auto omega = static_cast<float>(2.0 / (1.0 + std::sin(std::numbers::pi / width)));
+    constexpr float kSettled = 1e-4f;
+    constexpr int kMaxSweeps = 256;
+    for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
+        glm::vec3 moved(0.0f);
+        for (std::size_t i = 0; i < count; ++i) {
+            const Stencil& s = stencils[i];
+            glm::vec3 sum = s.fixed_sum;
+            for (std::uint32_t k = 0; k < s.inside; ++k) {
+                sum += colour[s.in_hole[k]];
+            }
+            const glm::vec3 step = omega * (sum * s.reciprocal - colour[i]);
+            colour[i] += step;
+            moved = glm::max(moved, glm::abs(step));
+        }
+        if (std::max({moved.x, moved.y, moved.z}) < kSettled) {
+            break;
+        }
+    }
+    for (std::size_t i = 0; i < count; ++i) {
+        const glm::vec3 c = glm::max(colour[i], glm::vec3(0.0f));
+        for (int a = 0; a < 3; ++a) {
+            map.rgba[4 * hole[i] + static_cast<std::size_t>(a)] = Imath::half(c[a]);
+        }
+    }
 }
 
 // The pull-push fill (the holes that are not disocclusions): a pull pyramid of the measured
@@ -535,9 +619,15 @@ void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
         return;
     }
     std::vector<std::int32_t> layer_of(map.texel_count(), kOutsideHole);
-    for (const auto& [h, split] : disocclusions) {
-        fill_from_background(map, holes[h], split, layer_of);
+    std::vector<std::int32_t> layers(disocclusions.size());
+    for (std::size_t d = 0; d < disocclusions.size(); ++d) {
+        const auto& [h, split] = disocclusions[d];
+        layers[d] = fill_from_background(map, holes[h], split, layer_of);
     }
+    tbb::parallel_for(std::size_t{0}, disocclusions.size(), [&](std::size_t d) {
+        const auto& [h, split] = disocclusions[d];
+        blend_colours_from_background(map, holes[h], split, layers[d]);
+    });
 }
 
 } // namespace lfprobe

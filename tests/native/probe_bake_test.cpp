@@ -499,6 +499,42 @@ TEST(ProbeBake, ADisocclusionContinuesTheSurfaceBehindNeverTheNearOne) {
     }
 }
 
+TEST(ProbeBake, ADisocclusionsColourIsTheSmoothBlendOfTheSurfaceBehind) {
+    // A hole 12 texels wide and 8 tall under a near object (red, 1 m, the rows above it) in a
+    // far surface (5 m) whose colour is a ramp along x. No scan saw what is there; the guess
+    // with the least squared error is the harmonic blend of the border, and that continues a
+    // linear ramp exactly. Filled layer by layer alone, each texel took its nearest border
+    // texels' colour: the hole's left column was the column left of it, a texel off.
+    ProbeMap map(32, glm::dvec3(0.0));
+    const glm::vec3 red(0.8f, 0.1f, 0.1f);
+    const auto ramp = [](int x) {
+        return glm::vec3(0.1f + 0.02f * static_cast<float>(x), 0.5f,
+                         0.9f - 0.02f * static_cast<float>(x));
+    };
+    std::vector<std::pair<std::size_t, int>> hole;
+    for (int y = 0; y < 32; ++y) {
+        for (int x = 0; x < 32; ++x) {
+            const std::size_t i = oct::texel_index({x, y}, 32);
+            const glm::vec3 dir = oct::texel_direction({x, y}, 32);
+            if (y < 4) {
+                map.set_surface(i, 1.0f, red, -dir, 1.0f);
+            } else if (x >= 8 && x < 20 && y < 12) {
+                map.set_unknown(i);
+                hole.emplace_back(i, x);
+            } else {
+                map.set_surface(i, 5.0f, ramp(x), -dir, 1.0f);
+            }
+        }
+    }
+    fill_small_holes(map, 8);
+    for (const auto& [i, x] : hole) {
+        ASSERT_EQ(map.state(i), TexelState::Inferred);
+        EXPECT_GT(map.distance[i], 4.0f); // the surface behind, never the near one
+        // The border's colours are half floats, the fill's too: a few of their steps.
+        EXPECT_LT(glm::length(map.radiance_at(i) - ramp(x)), 3e-3f) << "texel column " << x;
+    }
+}
+
 TEST(ProbeBake, AScannersShadowSeenFromBesideItShowsTheWallBehind) {
     // A 40 cm plate 0.6 m before a wall 3 m away, scanned from the origin: the wall has no
     // points in the plate's shadow (|y|, |z| < 1 m). From a probe 5 cm to the side, the band of
