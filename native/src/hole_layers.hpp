@@ -3,10 +3,17 @@
 // Internal to the core.
 #pragma once
 
+#include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <utility>
 #include <vector>
+
+#include <glm/common.hpp>
+#include <glm/vec3.hpp>
 
 #include "grid_neighbours.hpp"
 
@@ -72,6 +79,90 @@ void fill_hole_in_layers(const std::vector<Index>& hole, int w, int h,
     }
     for (const Index t : hole) {
         layer_of[t] = kOutsideHole; // every cell was reached: the hole is connected
+    }
+}
+
+// Makes the colours of a hole filled by fill_hole_in_layers the harmonic blend of its border's:
+// each cell the weighted mean of its 8 neighbours (the discrete Laplace equation), solved by
+// successive over-relaxation from `colour`, the layers' colours in the order of `hole`.
+// `border(u, sum, weight)` adds a neighbour u outside the hole that the blend draws from (the
+// surface behind) to sum (its colour times its weight) and weight; a neighbour it adds nothing
+// for (the near surface) is left out. The layers carry the nearest border cell's colour
+// straight in, so a skirting board's brown grew up a white wall in a streak; nothing saw what
+// lies in the hole, and the smooth blend of everything around it is the guess with the least
+// squared error. A linear ramp of colour along the border is continued exactly. `layers` (the
+// layers' count, about half the hole's width) sets the over-relaxation. Sweeps the cells in
+// index order, so the result does not depend on threads; reads only the hole and its border.
+template <class Index, class Border>
+void blend_hole_harmonically(const std::vector<Index>& hole, int w, int h,
+                             std::vector<glm::vec3>& colour, std::int32_t layers, Border&& border) {
+    const std::size_t count = hole.size();
+    std::vector<std::size_t> order(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        order[i] = i;
+    }
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return hole[a] < hole[b]; });
+    std::vector<Index> sorted(count);
+    std::vector<glm::vec3> value(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        sorted[i] = hole[order[i]];
+        value[i] = colour[order[i]];
+    }
+    // Per cell: its border neighbours' weighted colours, the reciprocal of all its neighbours'
+    // weight, and its neighbours in the hole (each weighs 1).
+    struct Stencil {
+        glm::vec3 fixed_sum{0.0f};
+        float reciprocal = 0.0f;
+        std::uint32_t inside = 0;
+        std::array<std::uint32_t, 8> in_hole{};
+    };
+    std::vector<Stencil> stencils(count);
+    for (std::size_t i = 0; i < count; ++i) {
+        Stencil& s = stencils[i];
+        float weight = 0.0f;
+        for_each_neighbour(sorted[i], w, h, [&](Index u) {
+            const auto at = std::lower_bound(sorted.begin(), sorted.end(), u);
+            if (at != sorted.end() && *at == u) {
+                s.in_hole[s.inside++] = static_cast<std::uint32_t>(at - sorted.begin());
+                weight += 1.0f;
+            } else {
+                border(u, s.fixed_sum, weight);
+            }
+        });
+        s.reciprocal = weight > 0.0f ? 1.0f / weight : 0.0f; // a lone cell keeps its colour
+    }
+    // The over-relaxation that converges fastest on a strip 2 × layers wide; the sweeps stop
+    // when no colour moves by more than kSettled (a tenth of a half float's step at 1), or after
+    // kMaxSweeps. Most holes settle in 20 to 150 sweeps; a long strip reached by the surface
+    // behind at its ends only would take its length (804 sweeps for the largest of a demo
+    // probe's, where all that probe's other holes took 170 between them), and stops part way
+    // from the layers' colours to the blend.
+    const double width = 2.0 * static_cast<double>(std::max(layers, 1)) + 1.0;
+    const auto omega = static_cast<float>(2.0 / (1.0 + std::sin(std::numbers::pi / width)));
+    constexpr float kSettled = 1e-4f;
+    constexpr int kMaxSweeps = 256;
+    for (int sweep = 0; sweep < kMaxSweeps; ++sweep) {
+        glm::vec3 moved(0.0f);
+        for (std::size_t i = 0; i < count; ++i) {
+            const Stencil& s = stencils[i];
+            if (s.reciprocal == 0.0f) {
+                continue;
+            }
+            glm::vec3 sum = s.fixed_sum;
+            for (std::uint32_t k = 0; k < s.inside; ++k) {
+                sum += value[s.in_hole[k]];
+            }
+            const glm::vec3 step = omega * (sum * s.reciprocal - value[i]);
+            value[i] += step;
+            moved = glm::max(moved, glm::abs(step));
+        }
+        if (std::max({moved.x, moved.y, moved.z}) < kSettled) {
+            break;
+        }
+    }
+    for (std::size_t i = 0; i < count; ++i) {
+        colour[order[i]] = glm::max(value[i], glm::vec3(0.0f));
     }
 }
 

@@ -156,8 +156,9 @@ HoleRegions hole_regions(const std::vector<std::uint8_t>& hole, const std::vecto
 // saw behind the near one, a disocclusion, and what lies there is the far surface continued.
 // Such a hole is filled from its far border alone (the border pixels at least as far as the
 // middle of its border's depths), layer by layer inward, a pixel the mean colour of its
-// neighbours already known, as a probe's hole fill continues the surface behind a
-// disocclusion (fill_hole_in_layers). `far_fill` gets the colour of every pixel of such a hole
+// neighbours already known (fill_hole_in_layers), then blended to the harmonic interpolation of
+// that border (blend_hole_harmonically), as a probe's hole fill continues the surface behind a
+// disocclusion. `far_fill` gets the colour of every pixel of such a hole
 // (coverage 1), and `filled` is 1 there; holes deeper than `reach` are left to stay black.
 void fill_disocclusions(const HoleRegions& regions, const std::vector<std::uint8_t>& hole,
                         const RenderedImage& image, const std::vector<float>& coverage,
@@ -200,9 +201,10 @@ void fill_disocclusions(const HoleRegions& regions, const std::vector<std::uint8
             continue;
         }
         const float split = 0.5f * (b.nearest + b.farthest);
+        const auto behind = [&](std::size_t u) { return has_depth(u) && image.depth[u] >= split; };
+        std::int32_t layers = 0;
         fill_hole_in_layers(
-            b.members, w, h, layer_of,
-            [&](std::size_t u) { return has_depth(u) && image.depth[u] >= split; },
+            b.members, w, h, layer_of, behind,
             [&](std::size_t i, auto&& known) {
                 // The far border's colours (premultiplied by their coverage) and the earlier
                 // layers' (coverage 1).
@@ -223,10 +225,26 @@ void fill_disocclusions(const HoleRegions& regions, const std::vector<std::uint8
                 });
                 return sum / weight;
             },
-            [&](std::size_t i, const glm::vec3& colour, std::int32_t) {
+            [&](std::size_t i, const glm::vec3& colour, std::int32_t layer) {
                 far_fill[i] = colour;
                 filled[i] = 1;
+                layers = std::max(layers, layer);
             });
+        // Then the harmonic blend of the far border, as a probe's disocclusions are given.
+        std::vector<glm::vec3> colour(b.members.size());
+        std::transform(b.members.begin(), b.members.end(), colour.begin(),
+                       [&](std::size_t i) { return far_fill[i]; });
+        blend_hole_harmonically(
+            b.members, w, h, colour, layers, [&](std::size_t u, glm::vec3& sum, float& weight) {
+                if (behind(u)) {
+                    sum +=
+                        glm::vec3(image.rgba[4 * u], image.rgba[4 * u + 1], image.rgba[4 * u + 2]);
+                    weight += std::min(coverage[u], 1.0f);
+                }
+            });
+        for (std::size_t m = 0; m < b.members.size(); ++m) {
+            far_fill[b.members[m]] = colour[m];
+        }
     }
 }
 

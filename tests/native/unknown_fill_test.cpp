@@ -180,6 +180,37 @@ TEST(UnknownFill, AHoleBesideANearEdgeIsFilledFromTheSurfaceBehind) {
     }
 }
 
+TEST(UnknownFill, ADisocclusionIsTheSmoothBlendOfTheSurfaceBehind) {
+    // Under a near object (red, 1 m, the rows above), a hole 12 pixels wide in a far surface
+    // (3 m) whose colour is a ramp along x: filled as a probe's disocclusions are, the harmonic
+    // blend of the far border continues the ramp exactly, where the layers alone gave the
+    // hole's left column the colour of the column left of it.
+    const glm::vec3 red(1.0f, 0.0f, 0.0f);
+    const auto ramp = [](int x) {
+        return glm::vec3(0.1f + 0.02f * static_cast<float>(x), 0.5f,
+                         0.9f - 0.02f * static_cast<float>(x));
+    };
+    Canvas canvas(40, 16, red);
+    for (int y = 0; y < 16; ++y) {
+        for (int x = 0; x < 40; ++x) {
+            const std::size_t i = canvas.image.index(x, y);
+            canvas.image.depth[i] = y < 3 ? 1.0f : 3.0f;
+            if (y >= 3) {
+                canvas.paint(i, ramp(x));
+            }
+        }
+    }
+    canvas.hole(12, 3, 24, 10);
+    (void)fill_unknown_pixels(canvas.image, canvas.unknown, 12);
+    for (int y = 3; y < 10; ++y) {
+        for (int x = 12; x < 24; ++x) {
+            const glm::vec4 p = canvas.at(x, y);
+            EXPECT_LT(glm::length(glm::vec3(p) - ramp(x)), 2e-3f) << x << ", " << y;
+            EXPECT_EQ(p.w, 1.0f);
+        }
+    }
+}
+
 TEST(UnknownFill, MissIsNeitherFilledNorASource) {
     Canvas canvas(24, 24, {0.8f, 0.8f, 0.8f});
     // The left third MISS (nothing there: colour 0, no unknown share), a hole beside it.

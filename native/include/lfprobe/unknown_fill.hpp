@@ -30,8 +30,9 @@ struct UnknownFillStats {
 // pixels of a pixel with a HIT: holes at most max_width pixels across. A hole on a silhouette
 // (the depths on its border differ by over 5 % of the nearest) is a disocclusion, what no
 // probe saw behind the near surface: it is filled from its far border alone (the pixels at
-// least as far as the middle of its border's depths), layer by layer inward, as a probe's
-// disocclusions are, instead of by the pull-push. max_width 0 fills nothing. Deterministic: the
+// least as far as the middle of its border's depths), layer by layer inward, then blended to
+// the harmonic interpolation of that border, as a probe's disocclusions are, instead of by the
+// pull-push. max_width 0 fills nothing. Deterministic: the
 // same image and shares give the same result on any thread count.
 UnknownFillStats fill_unknown_pixels(RenderedImage& image, std::span<const float> unknown_share,
                                      int max_width);
