@@ -8,6 +8,8 @@
 #include <immintrin.h>
 #endif
 
+#include "cpu_features.hpp"
+
 namespace lfprobe::few_keys_sort {
 
 namespace {
@@ -77,12 +79,7 @@ void sort_scalar(const std::uint64_t* keys, std::size_t count, std::uint64_t* ou
 // The top bit, flipped to compare unsigned keys as signed.
 constexpr std::uint64_t kFlip = std::uint64_t{1} << 63;
 
-const bool kHasAvx2 = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") != 0;
-}();
-
-// The same network shape as a bitonic sort, four keys to a register. AVX2 compares 64-bit lanes
+// A bitonic merge sort, four keys to a register. AVX2 compares 64-bit lanes
 // as signed integers only, so the keys are loaded with their top bit flipped (unsigned order
 // becomes signed order) and flipped back when stored.
 #define LFPROBE_AVX2 __attribute__((target("avx2"), always_inline)) inline
@@ -228,7 +225,7 @@ __attribute__((target("avx2"))) void smallest_sorted_avx2(const std::uint64_t* k
 void smallest_sorted(const std::uint64_t* keys, std::size_t count, std::size_t keep,
                      std::uint64_t* out, bool vectors) {
 #if LFPROBE_FEW_KEYS_AVX2
-    if (vectors && kHasAvx2) {
+    if (vectors && kCpuHasAvx2) {
         smallest_sorted_avx2(keys, count, keep, out);
         return;
     }

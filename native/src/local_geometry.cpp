@@ -23,6 +23,7 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/morton.hpp"
 
+#include "cpu_features.hpp"
 #include "few_keys_sort.hpp"
 
 namespace lfprobe {
@@ -123,11 +124,6 @@ std::size_t collect_scalar(const glm::vec3* positions, std::uint32_t begin, std:
 
 #if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
 #define LFPROBE_COLLECT_AVX2 1
-// Asked once, when the library loads (after the CPU's features are read: __builtin_cpu_init).
-const bool kHasAvx2 = [] {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") != 0;
-}();
 static_assert(sizeof(glm::vec3) == 3 * sizeof(float), "points are read as packed floats");
 
 // For each mask of four 64-bit keys, the 32-bit lanes that move the masked keys to the front,
@@ -240,7 +236,7 @@ public:
                                std::uint32_t available, const glm::vec3& p, float limit,
                                std::uint64_t* scratch, std::size_t count, bool vectors) {
 #if LFPROBE_COLLECT_AVX2
-        if (vectors && kHasAvx2) {
+        if (vectors && kCpuHasAvx2) {
             return collect_avx2(positions, begin, end, available, p, limit, scratch, count);
         }
 #else
