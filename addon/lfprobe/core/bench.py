@@ -372,7 +372,10 @@ def main(args) -> int:
                 f"{b['memory_bytes_per_probe'] / paper:.2f}× in memory, "
                 f"{b['disk_bytes_per_probe'] / paper:.2f}× on disk"
             )
-        points_list = [int(float(p)) for p in str(args.hierarchy_points).split(",") if p.strip()]
+        # Empty or 0 skips the comparison, as --scan-points 0 skips the scan (a cloud of no points
+        # has nothing to bake: the native error said only that).
+        points_list = [n for n in (int(float(p)) for p in str(args.hierarchy_points).split(",")
+                                   if p.strip()) if n > 0]
         if points_list:
             lods = [float(x) for x in str(args.hierarchy_lods).split(",")]
             print(f"\n== point hierarchy: one {args.res}² probe from generated rooms, every point "

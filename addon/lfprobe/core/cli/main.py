@@ -439,7 +439,7 @@ def build_parser() -> argparse.ArgumentParser:
                             "a file (default 28 M, a station at the paper's density; 0: skip)")
     bench.add_argument("--hierarchy-points", default="10000000,100000000",
                        help="core: cloud sizes for the point hierarchy's bake comparison "
-                            "(comma-separated; empty: skip)")
+                            "(comma-separated; empty or 0: skip)")
     bench.add_argument("--hierarchy-lods", default="0,1,2",
                        help="core: lod_texels values to bake with, 0 (every point) first")
     bench.add_argument("--hierarchy-colour-tolerance", type=finite_float, default=0.01, metavar="C",
