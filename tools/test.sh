@@ -29,6 +29,18 @@ LFPROBE_WERROR=1 bash tools/setup.sh
 echo "== C++ formatting (clang-format, the repository's .clang-format) =="
 git ls-files -z '*.cpp' '*.hpp' | xargs -0 clang-format --dry-run --Werror
 
+echo "== the core's sources as one unit (names in anonymous namespaces) =="
+# The build compiles the core eight sources to a unit (CMakeLists.txt: LFPROBE_UNITY_BUILD), so
+# a name in one source's anonymous namespace must not be another's, and which sources share a
+# unit changes whenever a source is added. All of them in one unit, for syntax only (about 15 s),
+# finds such a clash before a new source moves it into a batch.
+one_unit="$(mktemp --suffix=.cpp)"
+for source in native/src/*.cpp; do echo "#include \"$PWD/$source\""; done > "$one_unit"
+g++ -std=c++20 -fsyntax-only -DGLM_FORCE_XYZW_ONLY -DIMATH_HALF_NO_LOOKUP_TABLE \
+  -DLFPROBE_VERSION='"check"' -Inative/include -Inative/src -I/usr/include/stb \
+  -isystem /usr/include/OpenEXR -isystem /usr/include/Imath "$one_unit"
+rm -f "$one_unit"
+
 echo "== native tests =="
 (cd build && ctest --output-on-failure -j"$(nproc)")
 

@@ -1,13 +1,23 @@
-// Writing a cache entry (scan_cache.cpp, prepared_cloud_cache.cpp): every byte written or an
-// IoError, to a temporary that is removed unless the rename made it the entry, so an
-// interrupted or failed write never leaves a partial entry. Internal to the core.
+// Writing a cache entry (scan_cache.cpp, prepared_cloud_cache.cpp, spatial_cloud.cpp): every
+// byte written or an IoError, to a temporary that is removed unless the rename made it the
+// entry, so an interrupted or failed write never leaves a partial entry; and what an entry read
+// back must hold. Internal to the core.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <filesystem>
 #include <string>
 
+#include <glm/vec3.hpp>
+
 namespace lfprobe::cache_file {
+
+// Whether every component of a vector read from an entry is finite: an entry is checked before
+// it is used, and a range check written as `x < limit` lets a NaN through.
+[[nodiscard]] inline bool finite(const glm::vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 // Writes all of `size` bytes to `fd` or throws IoError naming `name`.
 void write_all(int fd, const void* data, std::size_t size, const std::string& name);

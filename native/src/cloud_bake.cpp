@@ -6,6 +6,7 @@
 #include "lfprobe/bake_scratch.hpp"
 #include "lfprobe/error.hpp"
 #include "lfprobe/prepared_cloud_cache.hpp"
+#include "seconds_since.hpp"
 
 namespace lfprobe {
 
@@ -24,10 +25,6 @@ CurveOrderedCloud curve_ordered_if_small(const CloudBakeSource& source, Progress
     return source.cloud->size() <= kMaxCurveOrderedPoints
                ? curve_ordered_cloud(*source.cloud, source.geometry, source.hierarchy, progress)
                : CurveOrderedCloud{};
-}
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 } // namespace

@@ -9,7 +9,7 @@ namespace lfprobe {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 } // namespace
 
@@ -86,7 +86,7 @@ GridWalk::GridWalk(const ProbeGrid& grid, const Ray& ray) : grid_(grid), ray_(ra
 double GridWalk::boundary_t(int axis) const {
     const auto ua = static_cast<std::size_t>(axis);
     if (!bounded_[ua] || step_[ua] == 0) {
-        return kInf;
+        return kInfinity;
     }
     const int face = cell_[ua] + (step_[ua] > 0 ? 1 : 0);
     return (grid_.origin[axis] + grid_.spacing[axis] * static_cast<double>(face) -

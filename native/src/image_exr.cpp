@@ -20,8 +20,8 @@ namespace lfprobe {
 
 namespace {
 
-constexpr const char* kFormatAttribute = "lfprobe/format";
-constexpr const char* kFormatValue = "lfprobe-render 1";
+constexpr const char* kImageFormatAttribute = "lfprobe/format";
+constexpr const char* kImageFormatValue = "lfprobe-render 1";
 constexpr const char* kMetadataAttribute = "lfprobe/render";
 
 // The float planes of a file, in channel order.
@@ -159,7 +159,7 @@ void write_rendered_exr(const std::string& path, const RenderedImage& image,
     if (!planes.guessed.empty()) {
         header.channels().insert(names.guessed, Imf::Channel(Imf::FLOAT));
     }
-    header.insert(kFormatAttribute, Imf::StringAttribute(kFormatValue));
+    header.insert(kImageFormatAttribute, Imf::StringAttribute(kImageFormatValue));
     if (!metadata.empty()) {
         header.insert(kMetadataAttribute, Imf::StringAttribute(metadata));
     }

@@ -26,7 +26,7 @@ using namespace known_space_bytes;
 
 namespace {
 
-constexpr char kMagic[8] = {'L', 'F', 'P', 'K', 'N', 'O', 'W', 'N'};
+constexpr char kKnownSpaceMagic[8] = {'L', 'F', 'P', 'K', 'N', 'O', 'W', 'N'};
 constexpr char kDirectionsMagic[8] = {'D', 'I', 'R', 'E', 'C', 'T', 'N', 'S'};
 // Voxel indices stay well inside int32 and a dense mask's arithmetic.
 constexpr double kMaxVoxelIndex = 1 << 28;
@@ -987,7 +987,7 @@ KnownSpaceMask KnownSpace::mask(double margin, double footprint_texels, int max_
 }
 
 void KnownSpace::write(const std::string& path) const {
-    std::string out(kMagic, sizeof(kMagic));
+    std::string out(kKnownSpaceMagic, sizeof(kKnownSpaceMagic));
     put(out, static_cast<std::uint8_t>(has_empty_ ? 1 : 0));
     put(out, farthest_);
     put(out, static_cast<std::uint64_t>(surfaces_.size()));
@@ -1018,10 +1018,11 @@ KnownSpace KnownSpace::read(const std::string& path) {
         throw MissingFileError(path + ": cannot open the known-space file");
     }
     const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    if (bytes.size() < sizeof(kMagic) || std::memcmp(bytes.data(), kMagic, sizeof(kMagic)) != 0) {
+    if (bytes.size() < sizeof(kKnownSpaceMagic) ||
+        std::memcmp(bytes.data(), kKnownSpaceMagic, sizeof(kKnownSpaceMagic)) != 0) {
         throw InputError(path + ": not a known-space file (expected it to start with LFPKNOWN)");
     }
-    std::size_t at = sizeof(kMagic);
+    std::size_t at = sizeof(kKnownSpaceMagic);
     KnownSpace space;
     space.has_empty_ = take<std::uint8_t>(bytes, at, path) != 0;
     space.farthest_ = take<double>(bytes, at, path);

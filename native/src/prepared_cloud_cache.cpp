@@ -30,8 +30,8 @@ namespace fs = std::filesystem;
 
 // Raise whenever the layout or the meaning of what is stored changes (a change to how normals,
 // spacing or the hierarchy are computed included).
-constexpr std::uint32_t kVersion = 1;
-constexpr std::array<char, 8> kMagic{'L', 'F', 'P', 'P', 'R', 'E', 'P', '1'};
+constexpr std::uint32_t kPreparedCloudVersion = 1;
+constexpr std::array<char, 8> kPreparedCloudMagic{'L', 'F', 'P', 'P', 'R', 'E', 'P', '1'};
 
 struct Header {
     std::array<char, 8> magic;
@@ -176,23 +176,21 @@ bool all_below(const std::vector<std::uint32_t>& indices, std::size_t limit) {
     return std::all_of(indices.begin(), indices.end(), [&](std::uint32_t i) { return i < limit; });
 }
 
-bool finite(const glm::vec3& v) {
-    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
 // What the computation gives: finite unit-or-zero normals, finite spacings of 0 or more.
 bool plausible(const std::vector<glm::vec3>& normals, const std::vector<float>& spacing) {
     return std::all_of(normals.begin(), normals.end(),
-                       [](const glm::vec3& v) { return finite(v) && glm::dot(v, v) <= 1.01f; }) &&
+                       [](const glm::vec3& v) {
+                           return cache_file::finite(v) && glm::dot(v, v) <= 1.01f;
+                       }) &&
            std::all_of(spacing.begin(), spacing.end(),
                        [](float s) { return std::isfinite(s) && s >= 0.0f; });
 }
 
 bool plausible(const std::vector<CellSurfel>& surfels) {
     return std::all_of(surfels.begin(), surfels.end(), [](const CellSurfel& s) {
-        return finite(s.position) && finite(s.normal) && glm::dot(s.normal, s.normal) <= 1.01f &&
-               finite(s.colour) && std::isfinite(s.spacing) && s.spacing >= 0.0f && s.facing <= 6 &&
-               s.oriented <= 1;
+        return cache_file::finite(s.position) && cache_file::finite(s.normal) &&
+               glm::dot(s.normal, s.normal) <= 1.01f && cache_file::finite(s.colour) &&
+               std::isfinite(s.spacing) && s.spacing >= 0.0f && s.facing <= 6 && s.oriented <= 1;
     });
 }
 
@@ -210,7 +208,7 @@ bool consistent(const PreparedCloud& p, std::size_t n) {
     if (h.levels.empty()) {
         return h.order.empty() || (h.order.size() == n && all_below(h.order, n));
     }
-    if (h.order.size() != n || !all_below(h.order, n) || !finite(h.origin) ||
+    if (h.order.size() != n || !all_below(h.order, n) || !cache_file::finite(h.origin) ||
         !(std::isfinite(h.cube_size) && h.cube_size > 0.0f) ||
         !(std::isfinite(h.intensity.min) && std::isfinite(h.intensity.scale))) {
         return false;
@@ -248,7 +246,7 @@ PreparedCloudKey prepared_cloud_key(const PointCloud& cloud, const LocalGeometry
         add(&count, sizeof(count));
         add(v.data(), v.size() * sizeof(v[0]));
     };
-    add(&kVersion, sizeof(kVersion));
+    add(&kPreparedCloudVersion, sizeof(kPreparedCloudVersion));
     const std::array<std::int32_t, 4> settings{
         options.normal_neighbours, options.spacing_neighbours, options.keep_file_normals ? 1 : 0,
         with_hierarchy ? 1 : 0};
@@ -298,8 +296,8 @@ std::optional<PreparedCloud> read_prepared_cloud(const std::string& entry,
             return std::nullopt;
         }
         std::memcpy(&header, file.data(), sizeof(Header));
-        if (header.magic != kMagic || header.version != kVersion || header.key != key.hash ||
-            header.point_count != key.point_count ||
+        if (header.magic != kPreparedCloudMagic || header.version != kPreparedCloudVersion ||
+            header.key != key.hash || header.point_count != key.point_count ||
             header.payload_bytes != file.size() - sizeof(Header)) {
             return std::nullopt;
         }
@@ -370,8 +368,8 @@ void write_prepared_cloud(const std::string& entry, const PreparedCloudKey& key,
             write_surfels(w, level.surfels);
         }
         w.flush();
-        header.magic = kMagic;
-        header.version = kVersion;
+        header.magic = kPreparedCloudMagic;
+        header.version = kPreparedCloudVersion;
         header.key = key.hash;
         header.point_count = key.point_count;
         header.payload_bytes = w.written();

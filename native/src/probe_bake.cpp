@@ -45,7 +45,7 @@ constexpr std::uint8_t kEdgeOffset = 18;
 
 // Below this |cos| between the texel ray and the surfel normal the surfel plane is too
 // grazing to extrapolate a depth from, and the point's own radial distance is used.
-constexpr float kMinPlaneCosine = 0.05f;
+constexpr float kMinSplatPlaneCosine = 0.05f;
 
 // Lower bounds on the angle between the centres of two neighbouring texels of an N×N map, for
 // turning an angular splat radius into a texel search radius that is never too small. The
@@ -196,7 +196,7 @@ float cosine_of_angle_subtended(float radius, float distance) {
 // that puts the surface implausibly far from the point (beyond half to twice its distance, and
 // outside the splat's disc), falls back to the point's own radial distance.
 float surfel_depth(const Surfel& p, const PlaneHit& h) {
-    if (std::abs(h.cos_plane) >= kMinPlaneCosine &&
+    if (std::abs(h.cos_plane) >= kMinSplatPlaneCosine &&
         ((h.s > 0.5f * p.dist && h.s < 2.0f * p.dist) || h.in_disc)) {
         return h.s;
     }

@@ -32,8 +32,8 @@ namespace lfprobe {
 
 namespace {
 
-constexpr const char* kFormatAttribute = "lfprobe/format";
-constexpr const char* kFormatValue = "lfprobe-probe 1";
+constexpr const char* kProbeFormatAttribute = "lfprobe/format";
+constexpr const char* kProbeFormatValue = "lfprobe-probe 1";
 constexpr const char* kPositionAttribute = "lfprobe/position";
 // Optional: written only for maps that know their texels' coverage (ProbeMap::coverage).
 constexpr const char* kCoverageChannel = "coverage";
@@ -471,7 +471,7 @@ void write_probe_exr_core(const std::string& tmp, const std::string& path, const
                               EXR_PERCEPTUALLY_LOGARITHMIC, 1, 1),
               "a channel");
     }
-    check(exr_attr_set_string(ctxt, part, kFormatAttribute, kFormatValue), "its format");
+    check(exr_attr_set_string(ctxt, part, kProbeFormatAttribute, kProbeFormatValue), "its format");
     const exr_attr_v3d_t position{{{map.position.x, map.position.y, map.position.z}}};
     check(exr_attr_set_v3d(ctxt, part, kPositionAttribute, &position), "its position");
     check(exr_write_header(ctxt), "its header");

@@ -19,7 +19,7 @@ namespace lfprobe {
 namespace {
 
 constexpr double kSqrtFourPi = oct::kTexelAngleTimesN;
-constexpr std::uint64_t kNoPoint = std::numeric_limits<std::uint64_t>::max();
+constexpr std::uint64_t kNoNearestPoint = std::numeric_limits<std::uint64_t>::max();
 
 double quantile_of(std::vector<double>& values, double q) {
     const auto k = static_cast<std::size_t>(
@@ -55,7 +55,7 @@ ResolutionChoice choose_resolution(const PointCloud& cloud, const LocalGeometry&
     std::vector<std::atomic<std::uint64_t>> front(static_cast<std::size_t>(n) *
                                                   static_cast<std::size_t>(n));
     for (auto& f : front) {
-        f.store(kNoPoint, std::memory_order_relaxed);
+        f.store(kNoNearestPoint, std::memory_order_relaxed);
     }
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, cloud.size(), 65536),
@@ -83,7 +83,7 @@ ResolutionChoice choose_resolution(const PointCloud& cloud, const LocalGeometry&
     std::vector<double> spacings;
     for (const auto& f : front) {
         const std::uint64_t key = f.load(std::memory_order_relaxed);
-        if (key == kNoPoint) {
+        if (key == kNoNearestPoint) {
             continue;
         }
         const auto index = static_cast<std::size_t>(key & 0xffffffffu);

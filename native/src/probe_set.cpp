@@ -13,6 +13,7 @@
 #include "lfprobe/json_input.hpp"
 #include "lfprobe/probe_exr.hpp"
 #include "lfprobe/probe_set_staging.hpp"
+#include "seconds_since.hpp"
 
 namespace lfprobe {
 
@@ -34,10 +35,6 @@ json coverage_json(const ProbeCoverage& c) {
                 {"inferred", c.inferred},
                 {"empty", c.empty},
                 {"unknown", c.unknown}};
-}
-
-double seconds_since(std::chrono::steady_clock::time_point start) {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 } // namespace

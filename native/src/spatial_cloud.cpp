@@ -40,10 +40,10 @@ namespace {
 namespace fs = std::filesystem;
 
 // Raise whenever the layout or the meaning of what is stored changes.
-constexpr std::uint32_t kVersion = 1;
-constexpr std::array<char, 8> kMagic{'L', 'F', 'P', 'S', 'P', 'A', 'T', '1'};
+constexpr std::uint32_t kSpatialCloudVersion = 1;
+constexpr std::array<char, 8> kSpatialCloudMagic{'L', 'F', 'P', 'S', 'P', 'A', 'T', '1'};
 constexpr std::size_t kPage = 4096;
-constexpr std::size_t kMaxLevels = 64;
+constexpr std::size_t kMaxCloudLevels = 64;
 constexpr std::size_t kChunk = std::size_t{1} << 16; // records per write
 
 struct FileSection {
@@ -178,12 +178,8 @@ FileSection write_surfels(SectionWriter& w, const std::vector<CellSurfel>& surfe
                      });
 }
 
-bool finite(const glm::vec3& v) {
-    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
 bool plausible_normal(const glm::vec3& n) {
-    return finite(n) && glm::dot(n, n) <= 1.01f;
+    return cache_file::finite(n) && glm::dot(n, n) <= 1.01f;
 }
 
 // Bounds on what a genuine file holds, so that a damaged one cannot feed the bake values it
@@ -237,7 +233,7 @@ void write_spatial_cloud_of_points(const std::string& path, const PreparedCloudK
                                    const PointHierarchy& hierarchy, bool in_curve_order,
                                    Progress* progress) {
     const std::size_t n = cloud.size();
-    if (hierarchy.levels.empty() || hierarchy.levels.size() > kMaxLevels ||
+    if (hierarchy.levels.empty() || hierarchy.levels.size() > kMaxCloudLevels ||
         hierarchy.order.size() != n || geometry.normals.size() != n ||
         geometry.spacing.size() != n || geometry.oriented.size() != n ||
         (!geometry.edges.empty() && geometry.edges.size() != n) || key.point_count != n) {
@@ -264,8 +260,8 @@ void write_spatial_cloud_of_points(const std::string& path, const PreparedCloudK
         SectionWriter w(fd, name, placeholder.size(), progress);
 
         FileHeader header{};
-        header.magic = kMagic;
-        header.version = kVersion;
+        header.magic = kSpatialCloudMagic;
+        header.version = kSpatialCloudVersion;
         header.has_edges = geometry.edges.empty() ? 0 : 1;
         header.key = key.hash;
         header.point_count = n;
@@ -337,17 +333,17 @@ SpatialCloud::SpatialCloud(const std::string& path, const std::string& key_hex)
         damaged(path, "shorter than its header");
     }
     std::memcpy(&header, file_.data(), sizeof(header));
-    if (header.magic != kMagic) {
+    if (header.magic != kSpatialCloudMagic) {
         damaged(path, "not a spatial cloud file");
     }
-    if (header.version != kVersion) {
+    if (header.version != kSpatialCloudVersion) {
         damaged(path, "version " + std::to_string(header.version) + ", this build reads " +
-                          std::to_string(kVersion));
+                          std::to_string(kSpatialCloudVersion));
     }
     if (prepared_cloud_key_hex({header.key, header.point_count}) != key_hex) {
         damaged(path, "written for another cloud than " + key_hex);
     }
-    if (header.level_count == 0 || header.level_count > kMaxLevels ||
+    if (header.level_count == 0 || header.level_count > kMaxCloudLevels ||
         file_.size() < table_bytes(header.level_count)) {
         damaged(path, "its section table is cut short");
     }
@@ -358,7 +354,8 @@ SpatialCloud::SpatialCloud(const std::string& path, const std::string& key_hex)
     }
     const std::size_t n = header.point_count;
     const glm::vec3 origin(header.origin[0], header.origin[1], header.origin[2]);
-    if (n > std::numeric_limits<std::uint32_t>::max() || header.has_edges > 1 || !finite(origin) ||
+    if (n > std::numeric_limits<std::uint32_t>::max() || header.has_edges > 1 ||
+        !cache_file::finite(origin) ||
         glm::any(glm::greaterThan(glm::abs(origin), glm::vec3(kMaxCoordinate))) ||
         !(header.cube_size > 0.0f && header.cube_size <= kMaxCoordinate)) {
         damaged(path, "its header's values are out of range");
@@ -452,7 +449,7 @@ void SpatialCloud::gather(HierarchyCut& cut, PointCloud& points, LocalGeometry& 
                                   geometry.edges[j] = read<SurfaceEdge>(edges_, k);
                               }
                               ok = ok && plausible.holds(points.positions[j]) &&
-                                   finite(points.colors[j]) &&
+                                   cache_file::finite(points.colors[j]) &&
                                    plausible_normal(geometry.normals[j]) &&
                                    plausible.spacing(geometry.spacing[j]) &&
                                    geometry.oriented[j] <= 1 &&
@@ -468,8 +465,9 @@ void SpatialCloud::gather(HierarchyCut& cut, PointCloud& points, LocalGeometry& 
     }
     const bool surfels_ok =
         std::all_of(cut.surfels.begin(), cut.surfels.end(), [&](const CellSurfel& s) {
-            return plausible.holds(s.position) && plausible_normal(s.normal) && finite(s.colour) &&
-                   plausible.spacing(s.spacing) && s.facing <= 6 && s.oriented <= 1;
+            return plausible.holds(s.position) && plausible_normal(s.normal) &&
+                   cache_file::finite(s.colour) && plausible.spacing(s.spacing) && s.facing <= 6 &&
+                   s.oriented <= 1;
         });
     if (!surfels_ok) {
         damaged(path(), "a surfel's values are not finite or out of range");
