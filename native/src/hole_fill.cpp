@@ -302,18 +302,18 @@ std::int32_t fill_from_background(ProbeMap& map, const std::vector<std::uint32_t
     return layers;
 }
 
-// Gives a disocclusion filled by fill_from_background the harmonic blend of its background
-// border's colours (blend_hole_harmonically): eye at the demo's grid probe 25.53 -> 26.63 dB.
-// Writes only the hole's colours and reads only it and its border, so holes can be blended at
-// once.
-void blend_colours_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole,
-                                   float split, std::int32_t layers) {
+// Gives a filled hole the harmonic blend of the colours of the texels around it that
+// `is_source` accepts (blend_hole_harmonically). Writes only the hole's colours and reads only
+// it and its border, so holes can be blended at once.
+template <class IsSource>
+void blend_colours_with(ProbeMap& map, const std::vector<std::uint32_t>& hole, std::int32_t layers,
+                        IsSource&& is_source) {
     std::vector<glm::vec3> colour(hole.size());
     std::transform(hole.begin(), hole.end(), colour.begin(),
                    [&](std::uint32_t t) { return map.radiance_at(t); });
     blend_hole_harmonically(hole, map.resolution, map.resolution, colour, layers,
                             [&](std::uint32_t u, glm::vec3& sum, float& weight) {
-                                if (is_background(map, u, split)) {
+                                if (is_source(u)) {
                                     sum += map.radiance_at(u);
                                     weight += 1.0f;
                                 }
@@ -323,6 +323,13 @@ void blend_colours_from_background(ProbeMap& map, const std::vector<std::uint32_
             map.rgba[4 * hole[i] + static_cast<std::size_t>(a)] = Imath::half(colour[i][a]);
         }
     }
+}
+
+// A disocclusion's, from its background border: eye at the demo's grid probe 25.53 -> 26.63 dB.
+void blend_colours_from_background(ProbeMap& map, const std::vector<std::uint32_t>& hole,
+                                   float split, std::int32_t layers) {
+    blend_colours_with(map, hole, layers,
+                       [&](std::uint32_t u) { return is_background(map, u, split); });
 }
 
 // The pull-push fill (the holes that are not disocclusions): a pull pyramid of the measured
@@ -559,6 +566,22 @@ void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
     }
     if (disocclusions.size() < holes.size()) {
         pull_push(map, fill, hole_fill_texels);
+        // Then the pull-push's colours blended harmonically with the measured texels around
+        // each hole, as a disocclusion's are with the surface behind it: a pull-push texel takes
+        // the mean of the smallest block around it with support, a step where the block changes.
+        // The demo grid's eyes gain up to 0.14 dB (between probes at the grid probe 31.88 ->
+        // 32.02 dB), none lose.
+        std::vector<std::size_t> pulled;
+        for (std::size_t h = 0; h < holes.size(); ++h) {
+            if (fill[holes[h].front()] != 0) {
+                pulled.push_back(h);
+            }
+        }
+        tbb::parallel_for(std::size_t{0}, pulled.size(), [&](std::size_t p) {
+            blend_colours_with(
+                map, holes[pulled[p]], (hole_fill_texels + 1) / 2,
+                [&](std::uint32_t u) { return map.state(u) == TexelState::Surface; });
+        });
     }
     if (disocclusions.empty()) {
         return;

@@ -535,6 +535,36 @@ TEST(ProbeBake, ADisocclusionsColourIsTheSmoothBlendOfTheSurfaceBehind) {
     }
 }
 
+TEST(ProbeBake, AGapInOneSurfaceTakesTheSmoothBlendOfItsBorder) {
+    // A 6×6 gap in one surface (5 m) whose colour is a saddle, harmonic for the 8-neighbour
+    // mean (x y is: the neighbours' offsets cancel). The pull-push alone steps from block mean
+    // to block mean (0.119 off at worst here); blended harmonically afterwards, the gap takes
+    // the saddle.
+    ProbeMap map(32, glm::dvec3(0.0));
+    const auto saddle = [](int x, int y) {
+        const auto s = 0.004f * static_cast<float>((x - 12) * (y - 12));
+        return glm::vec3(0.5f + s, 0.5f, 0.5f - s);
+    };
+    std::vector<std::pair<std::size_t, glm::ivec2>> gap;
+    for (int y = 0; y < 32; ++y) {
+        for (int x = 0; x < 32; ++x) {
+            const std::size_t i = oct::texel_index({x, y}, 32);
+            if (x >= 13 && x < 19 && y >= 13 && y < 19) {
+                map.set_unknown(i);
+                gap.emplace_back(i, glm::ivec2(x, y));
+            } else {
+                map.set_surface(i, 5.0f, saddle(x, y), -oct::texel_direction({x, y}, 32), 1.0f);
+            }
+        }
+    }
+    fill_small_holes(map, 8);
+    for (const auto& [i, at] : gap) {
+        ASSERT_EQ(map.state(i), TexelState::Inferred);
+        EXPECT_LT(glm::length(map.radiance_at(i) - saddle(at.x, at.y)), 3e-3f)
+            << "texel " << at.x << ", " << at.y;
+    }
+}
+
 TEST(ProbeBake, AScannersShadowSeenFromBesideItShowsTheWallBehind) {
     // A 40 cm plate 0.6 m before a wall 3 m away, scanned from the origin: the wall has no
     // points in the plate's shadow (|y|, |z| < 1 m). From a probe 5 cm to the side, the band of
