@@ -302,13 +302,16 @@ TEST(ProbeBake, AGapInANearSurfaceTakesTheNearSurfaceNeverABlend) {
     ProbeMap map(32, glm::dvec3(0.0));
     for (int y = 0; y < 32; ++y) {
         for (int x = 0; x < 32; ++x) {
-            const float d = x < 16 ? 1.0f : 5.0f; // near object left, far wall right
-            map.set_surface(oct::texel_index({x, y}, 32), d, glm::vec3(0.5f), glm::vec3(0, 0, 1),
-                            1.0f);
+            // A dark near object left, a bright far wall right.
+            const bool near = x < 16;
+            map.set_surface(oct::texel_index({x, y}, 32), near ? 1.0f : 5.0f,
+                            glm::vec3(near ? 0.2f : 0.9f), glm::vec3(0, 0, 1), 1.0f);
         }
     }
     // A gap of 4 texels in the near object that reaches its silhouette: the far wall is 3 of
     // its 14 border texels, so the gap is the near object's missing points, not a view behind.
+    // Its colour is the near object's too: the blend after the pull-push draws on the near
+    // surface around the gap only.
     std::vector<std::size_t> gap;
     for (int x = 12; x < 16; ++x) {
         gap.push_back(oct::texel_index({x, 10}, 32));
@@ -318,6 +321,7 @@ TEST(ProbeBake, AGapInANearSurfaceTakesTheNearSurfaceNeverABlend) {
     for (const std::size_t i : gap) {
         EXPECT_EQ(map.state(i), TexelState::Inferred);
         EXPECT_FLOAT_EQ(map.distance[i], 1.0f); // the near surface, never a floating blend
+        EXPECT_NEAR(map.radiance_at(i).x, 0.2f, 1e-3f);
     }
 }
 
