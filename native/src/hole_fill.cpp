@@ -597,7 +597,10 @@ void fill_small_holes(ProbeMap& map, int hole_fill_texels) {
     // writes only its hole and reads only measured texels, so all run at once.
     tbb::parallel_for(std::size_t{0}, pulled.size() + disocclusions.size(), [&](std::size_t i) {
         if (i < pulled.size()) {
-            const auto& [h, nearer_than] = pulled[i];
+            // Named copies, not a structured binding: C++20 lets a lambda capture one, but
+            // Clang 14 (the fuzz build) does not yet.
+            const std::size_t h = pulled[i].first;
+            const float nearer_than = pulled[i].second;
             blend_colours_with(map, holes[h].texels, holes[h].depth, [&](std::uint32_t u) {
                 return map.state(u) == TexelState::Surface && map.distance[u] < nearer_than;
             });
