@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <string>
 
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
 
 namespace lfprobe::cache_file {
@@ -17,6 +18,12 @@ namespace lfprobe::cache_file {
 // it is used, and a range check written as `x < limit` lets a NaN through.
 [[nodiscard]] inline bool finite(const glm::vec3& v) {
     return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+// A normal as the core stores one: finite, unit length or zero (no normal known); the margin
+// takes the rounding of a normalised float vector.
+[[nodiscard]] inline bool plausible_normal(const glm::vec3& n) {
+    return finite(n) && glm::dot(n, n) <= 1.01f;
 }
 
 // Writes all of `size` bytes to `fd` or throws IoError naming `name`.

@@ -178,19 +178,16 @@ bool all_below(const std::vector<std::uint32_t>& indices, std::size_t limit) {
 
 // What the computation gives: finite unit-or-zero normals, finite spacings of 0 or more.
 bool plausible(const std::vector<glm::vec3>& normals, const std::vector<float>& spacing) {
-    return std::all_of(normals.begin(), normals.end(),
-                       [](const glm::vec3& v) {
-                           return cache_file::finite(v) && glm::dot(v, v) <= 1.01f;
-                       }) &&
+    return std::all_of(normals.begin(), normals.end(), cache_file::plausible_normal) &&
            std::all_of(spacing.begin(), spacing.end(),
                        [](float s) { return std::isfinite(s) && s >= 0.0f; });
 }
 
 bool plausible(const std::vector<CellSurfel>& surfels) {
     return std::all_of(surfels.begin(), surfels.end(), [](const CellSurfel& s) {
-        return cache_file::finite(s.position) && cache_file::finite(s.normal) &&
-               glm::dot(s.normal, s.normal) <= 1.01f && cache_file::finite(s.colour) &&
-               std::isfinite(s.spacing) && s.spacing >= 0.0f && s.facing <= 6 && s.oriented <= 1;
+        return cache_file::finite(s.position) && cache_file::plausible_normal(s.normal) &&
+               cache_file::finite(s.colour) && std::isfinite(s.spacing) && s.spacing >= 0.0f &&
+               s.facing <= 6 && s.oriented <= 1;
     });
 }
 

@@ -178,10 +178,6 @@ FileSection write_surfels(SectionWriter& w, const std::vector<CellSurfel>& surfe
                      });
 }
 
-bool plausible_normal(const glm::vec3& n) {
-    return cache_file::finite(n) && glm::dot(n, n) <= 1.01f;
-}
-
 // Bounds on what a genuine file holds, so that a damaged one cannot feed the bake values it
 // cannot square (a length of a position beyond 1e19 overflows a float): every point and surfel
 // lies in the hierarchy's bounding cube, every spacing is less than a few cubes.
@@ -450,7 +446,7 @@ void SpatialCloud::gather(HierarchyCut& cut, PointCloud& points, LocalGeometry& 
                               }
                               ok = ok && plausible.holds(points.positions[j]) &&
                                    cache_file::finite(points.colors[j]) &&
-                                   plausible_normal(geometry.normals[j]) &&
+                                   cache_file::plausible_normal(geometry.normals[j]) &&
                                    plausible.spacing(geometry.spacing[j]) &&
                                    geometry.oriented[j] <= 1 &&
                                    (geometry.edges.empty() || plausible_edge(geometry.edges[j]));
@@ -465,7 +461,7 @@ void SpatialCloud::gather(HierarchyCut& cut, PointCloud& points, LocalGeometry& 
     }
     const bool surfels_ok =
         std::all_of(cut.surfels.begin(), cut.surfels.end(), [&](const CellSurfel& s) {
-            return plausible.holds(s.position) && plausible_normal(s.normal) &&
+            return plausible.holds(s.position) && cache_file::plausible_normal(s.normal) &&
                    cache_file::finite(s.colour) && plausible.spacing(s.spacing) && s.facing <= 6 &&
                    s.oriented <= 1;
         });
