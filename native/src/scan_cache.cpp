@@ -162,20 +162,21 @@ template <typename T, glm::qualifier Q>
 template <class T>
 [[nodiscard]] bool copy_finite(const char* from, std::size_t count, std::vector<T>& values) {
     resize_in_huge_pages(values, count);
-    constexpr std::size_t kBlock = std::size_t{1} << 16;
+    constexpr std::size_t kCopyBlock = std::size_t{1} << 16;
     std::atomic<bool> finite_all{true};
-    tbb::parallel_for(std::size_t{0}, (count + kBlock - 1) / kBlock, [&](std::size_t block) {
-        const std::size_t begin = block * kBlock;
-        const std::size_t end = std::min(count, begin + kBlock);
-        std::memcpy(values.data() + begin, from + begin * sizeof(T), (end - begin) * sizeof(T));
-        bool block_finite = true;
-        for (std::size_t i = begin; i < end; ++i) {
-            block_finite = block_finite && finite(values[i]);
-        }
-        if (!block_finite) {
-            finite_all.store(false, std::memory_order_relaxed);
-        }
-    });
+    tbb::parallel_for(
+        std::size_t{0}, (count + kCopyBlock - 1) / kCopyBlock, [&](std::size_t block) {
+            const std::size_t begin = block * kCopyBlock;
+            const std::size_t end = std::min(count, begin + kCopyBlock);
+            std::memcpy(values.data() + begin, from + begin * sizeof(T), (end - begin) * sizeof(T));
+            bool block_finite = true;
+            for (std::size_t i = begin; i < end; ++i) {
+                block_finite = block_finite && finite(values[i]);
+            }
+            if (!block_finite) {
+                finite_all.store(false, std::memory_order_relaxed);
+            }
+        });
     return finite_all.load();
 }
 

@@ -214,15 +214,15 @@ ScanStats write_simulated_scan(const EmbreeScene& scene, const ScannerSettings& 
     }
     // The lines "x y z r g b" (%.6f, bytes) formatted in blocks on all cores with to_chars,
     // which prints what printf prints: one core's snprintf took twice the scan's time.
-    constexpr std::size_t kBlock = 1 << 16;
-    const std::size_t blocks = (points.size() + kBlock - 1) / kBlock;
+    constexpr std::size_t kPointsPerBlock = 1 << 16;
+    const std::size_t blocks = (points.size() + kPointsPerBlock - 1) / kPointsPerBlock;
     std::vector<std::string> parts(blocks);
     tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
         std::string& part = parts[b];
-        const std::size_t end = std::min(points.size(), (b + 1) * kBlock);
-        part.resize((end - b * kBlock) * kMaxXyzLine);
+        const std::size_t end = std::min(points.size(), (b + 1) * kPointsPerBlock);
+        part.resize((end - b * kPointsPerBlock) * kMaxXyzLine);
         char* out = part.data();
-        for (std::size_t i = b * kBlock; i < end; ++i) {
+        for (std::size_t i = b * kPointsPerBlock; i < end; ++i) {
             out = format_xyz_line(out, points[i].position, points[i].color);
         }
         part.resize(static_cast<std::size_t>(out - part.data()));
