@@ -7,9 +7,6 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
-#include <map>
-#include <memory>
-#include <mutex>
 #include <vector>
 
 #include <glm/geometric.hpp>
@@ -20,6 +17,7 @@
 #include "lfprobe/error.hpp"
 #include "lfprobe/octahedral.hpp"
 #include "lfprobe/point_colours.hpp"
+#include "texel_angle_bounds.hpp"
 
 namespace lfprobe {
 
@@ -46,92 +44,6 @@ constexpr std::uint8_t kEdgeOffset = 18;
 // Below this |cos| between the texel ray and the surfel normal the surfel plane is too
 // grazing to extrapolate a depth from, and the point's own radial distance is used.
 constexpr float kMinSplatPlaneCosine = 0.05f;
-
-// Lower bounds on the angle between the centres of two neighbouring texels of an N×N map, for
-// turning an angular splat radius into a texel search radius that is never too small. The
-// octahedral map's texels shrink to about half the mean angle near its corners and are near
-// the mean elsewhere, so one bound for the whole map would make most searches four times the
-// area they need: the bound is kept per block of texels (the block and the blocks around it),
-// and the whole map's is used where a search reaches beyond the blocks around.
-class TexelAngleBounds {
-public:
-    static constexpr int kBlock = 16;
-
-    explicit TexelAngleBounds(int n) : blocks_((n + kBlock - 1) / kBlock) {
-        std::vector<float> own(static_cast<std::size_t>(blocks_) * blocks_,
-                               std::numeric_limits<float>::infinity());
-        tbb::parallel_for(0, blocks_, [&](int by) {
-            for (int y = by * kBlock; y < std::min(n, (by + 1) * kBlock); ++y) {
-                for (int x = 0; x < n; ++x) {
-                    const glm::vec3 d = oct::texel_direction({x, y}, n);
-                    float smallest = std::numeric_limits<float>::infinity();
-                    if (x + 1 < n) {
-                        smallest =
-                            std::min(smallest, angle(d, oct::texel_direction({x + 1, y}, n)));
-                    }
-                    if (y + 1 < n) {
-                        smallest =
-                            std::min(smallest, angle(d, oct::texel_direction({x, y + 1}, n)));
-                    }
-                    float& slot = own[static_cast<std::size_t>(by) * blocks_ + x / kBlock];
-                    slot = std::min(slot, smallest);
-                }
-            }
-        });
-        global_ = *std::min_element(own.begin(), own.end());
-        if (!(global_ > 0.0f)) {
-            global_ = 1e-6f;
-        }
-        // Each block's bound covers the blocks around it too (the map wraps at its edges).
-        around_.assign(own.size(), global_);
-        for (int by = 0; by < blocks_; ++by) {
-            for (int bx = 0; bx < blocks_; ++bx) {
-                float smallest = std::numeric_limits<float>::infinity();
-                for (int dy = -1; dy <= 1; ++dy) {
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        const int y = (by + dy + blocks_) % blocks_;
-                        const int x = (bx + dx + blocks_) % blocks_;
-                        smallest =
-                            std::min(smallest, own[static_cast<std::size_t>(y) * blocks_ + x]);
-                    }
-                }
-                around_[static_cast<std::size_t>(by) * blocks_ + bx] = std::max(smallest, global_);
-            }
-        }
-    }
-
-    // The search radius in texels around `home` that holds every texel within `alpha` radians
-    // of a direction in `home`: a texel k steps away lies at least (k - 0.5) bounds away.
-    [[nodiscard]] int search_radius(oct::Texel home, float alpha, int max_radius) const {
-        const float local =
-            around_[static_cast<std::size_t>(home.y / kBlock) * blocks_ + home.x / kBlock];
-        const int r = static_cast<int>(std::ceil(alpha / local + 0.5f));
-        if (r <= kBlock) {
-            return std::min(max_radius, r);
-        }
-        return std::min(max_radius, static_cast<int>(std::ceil(alpha / global_ + 0.5f)));
-    }
-
-    // One bound set per resolution, made once.
-    static const TexelAngleBounds& of(int n) {
-        static std::mutex mutex;
-        static std::map<int, std::unique_ptr<TexelAngleBounds>> cache;
-        std::lock_guard lock(mutex);
-        std::unique_ptr<TexelAngleBounds>& slot = cache[n];
-        if (!slot) {
-            slot = std::make_unique<TexelAngleBounds>(n);
-        }
-        return *slot;
-    }
-
-private:
-    static float angle(const glm::vec3& a, const glm::vec3& b) {
-        return std::acos(std::min(1.0f, glm::dot(a, b)));
-    }
-    int blocks_;
-    float global_ = 0.0f;
-    std::vector<float> around_;
-};
 
 // A point as one probe sees it: offset v from the probe centre, its distance and direction,
 // its normal (oriented toward its scanner where that is known, else toward the probe), normal·v
