@@ -582,7 +582,10 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
             // that far side. It gives no colour, and wins a texel only where no surfel facing
             // the probe reaches it (the top bit orders it last).
             const bool far_side = b.cell_surfel && b.oriented && p.normal_v > 0.0f;
-            const float off_centre = std::max(0.0f, 1.0f - glm::dot(directions[t], p.dir));
+            // From the chord: 1 - dot rounds to steps of 6e-8 near 1, a sixth of a 2048² texel's
+            // half angle squared (the colour weights came in sixths, the winner's order in ties).
+            const glm::vec3 chord = directions[t] - p.dir;
+            const float off_centre = 0.5f * glm::dot(chord, chord);
             keep_smaller(winner[t],
                          (far_side ? kFarSide : std::uint64_t{0}) |
                              (static_cast<std::uint64_t>(ordered_bits(off_centre)) << 32) | b.id);
