@@ -263,6 +263,29 @@ def hierarchy_benchmark(points: int, resolution: int, lods: list, reference: dic
     return row
 
 
+def texel_scaling_benchmark(points: int, resolutions: list, tmp: str) -> dict:
+    """One probe at HIERARCHY_PROBE baked from the same generated room at each resolution (the
+    default lod_texels): the bake's seconds against the probe's texels. The cloud's normals and
+    hierarchy are made once (a prepared-cloud cache in `tmp`), so each row is the probe's own
+    bake."""
+    _native = native.load()
+    positions, colors = room_cloud(points)
+    cloud = _native.PointCloud.from_arrays(positions, colors, scanners=[HIERARCHY_PROBE])
+    del positions, colors
+    cache = os.path.join(tmp, "texel_scaling_cache")
+    rows = []
+    for res in resolutions:
+        folder = os.path.join(tmp, f"texels_{res}")
+        summary = _native.bake_probe_set(cloud, folder, resolution=res, positions=[HIERARCHY_PROBE],
+                                         positions_in_world=False, cache_dir=cache)
+        shutil.rmtree(folder, ignore_errors=True)
+        rows.append({"resolution": res, "texels": res * res, "bake_seconds": summary["bake_seconds"],
+                     "seconds_per_million_texels": summary["bake_seconds"] / (res * res / 1e6)})
+    del cloud
+    shutil.rmtree(cache, ignore_errors=True)
+    return {"points": points, "rows": rows}
+
+
 def simulated_scan_benchmark(points: int, tmp: str) -> dict:
     """One full sweep of the benchmark room from its middle at the step that gives about
     `points` rays (every ray meets a wall): streamed into a cloud (start_simulate_scans) and
@@ -372,6 +395,18 @@ def main(args) -> int:
                 f"{b['memory_bytes_per_probe'] / paper:.2f}× in memory, "
                 f"{b['disk_bytes_per_probe'] / paper:.2f}× on disk"
             )
+        resolutions = [int(r) for r in str(args.texel_resolutions).split(",") if r.strip()]
+        if resolutions:
+            print(f"\n== bake against the probe's texels: one probe from the same {args.points:,} points "
+                  f"at {', '.join(f'{r}²' for r in resolutions)} ==")
+            t = texel_scaling_benchmark(args.points, resolutions, tmp)
+            results["texel_scaling"] = t
+            first = t["rows"][0]
+            for row in t["rows"]:
+                print(f"  {row['resolution']}²: bake {row['bake_seconds']:.2f} s, "
+                      f"{row['seconds_per_million_texels']:.3f} s per million texels; "
+                      f"{row['texels'] / first['texels']:.0f}× the texels of {first['resolution']}², "
+                      f"{row['bake_seconds'] / first['bake_seconds']:.2f}× the time")
         # Empty or 0 skips the comparison, as --scan-points 0 skips the scan (a cloud of no points
         # has nothing to bake: the native error said only that).
         points_list = [n for n in (int(float(p)) for p in str(args.hierarchy_points).split(",")

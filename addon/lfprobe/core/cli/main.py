@@ -445,6 +445,10 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--hierarchy-colour-tolerance", type=finite_float, default=0.01, metavar="C",
                        help="core: one more hierarchy bake per cloud, at lod_texels 1 with this "
                             "lod_colour_tolerance (default %(default)s; 0: skip)")
+    bench.add_argument("--texel-resolutions", default="1024,2048,4096",
+                       help="core: one probe baked from the bake benchmark's cloud (--points) at each "
+                            "of these resolutions: its cost against its texels (comma-separated; "
+                            "empty: skip)")
     bench.add_argument("--cluster-points", type=int, default=2_000_000,
                        help="cluster: points of the generated room")
     bench.add_argument("--cluster-workers", type=int, default=2,
