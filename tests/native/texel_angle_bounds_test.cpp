@@ -3,6 +3,7 @@
 // takes (at 4096² the arccosine of a float dot product once made corner blocks' bounds 0).
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
@@ -47,7 +48,7 @@ TEST(TexelAngleBounds, AreBelowTheAngleBetweenNeighbouringTexels) {
 TEST(TexelAngleBounds, StayNearTheTexelAngleAtHighResolutions) {
     for (const int n : {2048, 4096, 8192}) {
         const TexelAngleBounds& bounds = TexelAngleBounds::of(n);
-        const double mean_texel_angle = std::sqrt(4.0 * M_PI) / n;
+        const double mean_texel_angle = std::sqrt(4.0 * std::numbers::pi) / n;
         EXPECT_GT(bounds.global(), 0.4 * mean_texel_angle) << n << "²";
         for (int y = 0; y < n; y += TexelAngleBounds::kBlock) {
             for (int x = 0; x < n; x += TexelAngleBounds::kBlock) {
