@@ -121,6 +121,8 @@ def test_distance_walk_peers_and_stability_are_measured(tiny_report):
         assert 0.0 <= r["guessed_pixels"] <= 1.0 and 0.0 <= r["guessed_error_share"] <= 1.0
         if r["source"] == "mesh":
             assert r["guessed_pixels"] == 0.0 and r["psnr_off_guesses"] == pytest.approx(r["psnr"])
+            # Nothing guessed: every pixel is the probe at the eye's.
+            assert r["psnr_seen_exact"] == pytest.approx(r["psnr_probe_at_eye"])
     methods = {r["method"].split(" (")[0] for r in data["peers"]["rows"]}
     assert methods == {"probes", "splats", "Poisson mesh"}, data["peers"]["poisson"]
     poisson = data["peers"]["poisson"]
@@ -316,6 +318,27 @@ def test_guessed_figures_are_the_share_of_pixels_on_guesses_their_error_and_the_
     # Images without the channel (splats, meshes, older files) have no such figures.
     del test["guessed"]
     assert guessed_figures(reference, test) == {}
+
+
+def test_psnr_seen_as_exact_keeps_the_guesses_and_takes_every_other_pixel_from_the_stand_in():
+    import numpy as np
+
+    status = np.full((4, 6), metrics.STATUS_HIT, np.uint8)
+    reference = {"rgba": np.zeros((4, 6, 4), np.float32), "status": status, "width": 6, "height": 4}
+    test = {"rgba": np.zeros((4, 6, 4), np.float32), "status": status, "width": 6, "height": 4,
+            "guessed": np.zeros((4, 6), np.uint8)}
+    stand_in = {"rgba": np.zeros((4, 6, 4), np.float32), "status": status, "width": 6, "height": 4}
+    test["guessed"][1, 2:5] = 1
+    test["rgba"][1, 2, :3] = 0.5  # an error on a guess: kept
+    test["rgba"][3, 0, :3] = 0.5  # an error off the guesses: replaced by the stand-in's pixel
+    only_the_guess = dict(test, rgba=test["rgba"].copy())
+    only_the_guess["rgba"][3, 0, :3] = 0.0
+    expected = metrics.psnr(reference["rgba"][..., :3], only_the_guess["rgba"][..., :3])
+    assert metrics.psnr_seen_as(reference, test, stand_in) == pytest.approx(expected)
+    stand_in["rgba"][0, 0, :3] = 0.25  # the stand-in's own error off the guesses counts
+    assert metrics.psnr_seen_as(reference, test, stand_in) < expected
+    del test["guessed"]
+    assert metrics.psnr_seen_as(reference, test, stand_in) is None
 
 
 def test_mesh_probe_from_its_own_centre_reproduces_ground_truth_up_to_its_resolution(native, scene_path, tmp_path):

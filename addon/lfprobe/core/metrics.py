@@ -229,6 +229,20 @@ def guessed_figures(reference: Dict[str, np.ndarray], test: Dict[str, np.ndarray
             (math.inf if off_mse == 0.0 else 10.0 * math.log10(1.0 / off_mse))}
 
 
+def psnr_seen_as(reference: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
+                 stand_in: Dict[str, np.ndarray]) -> Optional[float]:
+    """PSNR of `test` (a probe render with its "guessed" plane) with every pixel that is not a
+    guess taken from `stand_in`, an image of the same camera: what `test` would score were all it
+    shows of what the scans saw as exact as `stand_in`, its guesses (what no scan saw) as they
+    are. None for images without the plane."""
+    if "guessed" not in test:
+        return None
+    rgba = np.asarray(test["rgba"])
+    guessed = np.asarray(test["guessed"]).reshape(rgba.shape[:2]) != 0
+    mixed = np.where(guessed[..., None], visible_colour(test), visible_colour(stand_in))
+    return psnr(visible_colour(reference), mixed)
+
+
 def wrong_surface_rate(ref_depth: np.ndarray, test_depth: np.ndarray, ref_hit: np.ndarray,
                        test_hit: np.ndarray) -> float:
     """Of the pixels both images hit with finite positive depth, the fraction whose test depth is

@@ -181,6 +181,13 @@ def _findings(data: Dict[str, object], reference: Optional[Dict[str, object]]) -
                                  f"{100 * r['guessed_pixels']:.2f} %, {100 * r['guessed_error_share']:.0f} %, "
                                  f"{r['psnr_off_guesses']:.2f} dB at {r['distance_to_nearest_probe']:.3f} m"
                                  for r in guesses) + ".")
+                seen = [r for r in guesses if r.get("psnr_seen_exact") is not None]
+                if seen:
+                    sentence += (" Were all that the scans saw as exact as the mesh-baked probe at the eye, "
+                                 "the guesses as they are, the view would score " + "; ".join(
+                                     f"{r['psnr_seen_exact']:.2f} dB at {r['distance_to_nearest_probe']:.3f} m"
+                                     for r in seen) + ": the bound these scans set at this resolution, made of "
+                                 "the guesses' error (what no station saw) and the exact probe's own.")
             f["distance"].append(sentence)
     series: Dict[str, List[Dict[str, object]]] = {}
     for r in data["sweep"]:

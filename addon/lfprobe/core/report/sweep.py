@@ -17,6 +17,7 @@ import numpy as np
 from .. import pipeline
 from ..pipeline import BakeOptions, ProbePlacementSpec, bake_from_mesh
 from ..embree_rates import embree_rates
+from ..metrics import psnr_seen_as
 from .measure import (RunContext, error_share, guessed_figures, measure, nearest_probe_distance, pixel_count,
                       psnr_only, silhouette_pixels, timing)
 from .presets import BAKE_VARIANTS, COMPACT_TRACE, DEFAULT_TRACE, LOAD_KEYS
@@ -173,7 +174,7 @@ class Sweep:
         self.reference_images: Dict[str, Tuple[dict, dict, np.ndarray, dict]] = {}
         self.reference_setting: Optional[str] = None
         self.mesh_triplets: Dict[str, Tuple[dict, dict, np.ndarray, dict]] = {}
-        self._controls: Dict[tuple, float] = {}
+        self._controls: Dict[tuple, Tuple[float, dict]] = {}
         # Mesh-baked single probes by (eye, resolution): the distance sweep's control at a grid
         # probe is the probe the at-probe section sees from its centre, baked once for both.
         self._mesh_probes: Dict[tuple, Tuple[str, float, float]] = {}
@@ -322,26 +323,28 @@ class Sweep:
                 gt, _ = ctx.ground_truth(camera)
                 image, stats = ctx.render_probes(field, camera, DEFAULT_TRACE[1])
                 figures, _ = measure(gt, image)
-                control = self._probe_at_eye_psnr(view, eye, setup.resolution, camera, gt)
+                control, control_image = self._probe_at_eye(view, eye, setup.resolution, camera, gt)
                 row = {"source": source, "view": view.name, "resolution": setup.resolution,
                        "fraction_to_cell_centre": fraction, "eye": eye,
                        "distance_to_nearest_probe": nearest_probe_distance(eye, positions),
                        **timing(stats, pixel_count(camera)), "texels_per_ray": stats["mean_steps"], **figures,
                        **guessed_figures(gt, image), "psnr_probe_at_eye": control,
+                       "psnr_seen_exact": psnr_seen_as(gt, image, control_image),
                        "psnr_loss": control - figures["psnr"] if math.isfinite(control) and math.isfinite(figures["psnr"]) else None}
                 self.distance_rows.append(row)
         ctx.log(f"  error against distance from the nearest probe ({source} probes): "
                 f"{len(ctx.views) * len(ctx.preset.distance_fractions)} eyes")
 
-    def _probe_at_eye_psnr(self, view, eye: List[float], resolution: int, camera: dict, gt: dict) -> float:
-        """PSNR of a mesh-baked probe of the same resolution placed at the eye itself: what this
-        view would score with no distance to travel (the control that removes what the eye sees
-        from the comparison between positions)."""
+    def _probe_at_eye(self, view, eye: List[float], resolution: int, camera: dict,
+                      gt: dict) -> Tuple[float, dict]:
+        """PSNR and image of a mesh-baked probe of the same resolution placed at the eye itself:
+        what this view would score with no distance to travel (the control that removes what the
+        eye sees from the comparison between positions)."""
         key = (view.name, tuple(eye), resolution)
         if key not in self._controls:
             folder, _, _ = self._mesh_probe(eye, resolution)
             image, _ = self.ctx.render_probes(self.ctx.native.ProbeField.load(folder), camera, DEFAULT_TRACE[1])
-            self._controls[key] = psnr_only(gt, image)
+            self._controls[key] = (psnr_only(gt, image), image)
         return self._controls[key]
 
     def _mesh_probe(self, eye: Sequence[float], resolution: int) -> Tuple[str, float, float]:
