@@ -209,6 +209,12 @@ def error_share(reference: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
     return float(squared[np.asarray(mask, dtype=bool)].sum()) / total if total > 0 else 0.0
 
 
+def _guessed_mask(test: Dict[str, np.ndarray]) -> np.ndarray:
+    """The pixels of a probe render whose centre sample met a hole-filled texel, as booleans in
+    the image's shape."""
+    return np.asarray(test["guessed"]).reshape(np.asarray(test["rgba"]).shape[:2]) != 0
+
+
 def guessed_figures(reference: Dict[str, np.ndarray], test: Dict[str, np.ndarray]) -> Dict[str, object]:
     """Where a probe render shows a guess (its "guessed" plane: the centre sample HIT a
     hole-filled texel, a surface no scan saw there): the share of the pixels
@@ -217,7 +223,7 @@ def guessed_figures(reference: Dict[str, np.ndarray], test: Dict[str, np.ndarray
     images without the plane (ground truth, splats, other files, renders from before it)."""
     if "guessed" not in test:
         return {}
-    guessed = np.asarray(test["guessed"]).reshape(np.asarray(test["rgba"]).shape[:2]) != 0
+    guessed = _guessed_mask(test)
     # The images encoded once for all three figures.
     squared = _squared_error(reference, test)
     total = float(squared.sum())
@@ -237,8 +243,7 @@ def psnr_seen_as(reference: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
     are. None for images without the plane."""
     if "guessed" not in test:
         return None
-    rgba = np.asarray(test["rgba"])
-    guessed = np.asarray(test["guessed"]).reshape(rgba.shape[:2]) != 0
+    guessed = _guessed_mask(test)
     mixed = np.where(guessed[..., None], visible_colour(test), visible_colour(stand_in))
     return psnr(visible_colour(reference), mixed)
 

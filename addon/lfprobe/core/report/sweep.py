@@ -337,14 +337,16 @@ class Sweep:
 
     def _probe_at_eye(self, view, eye: List[float], resolution: int, camera: dict,
                       gt: dict) -> Tuple[float, dict]:
-        """PSNR and image of a mesh-baked probe of the same resolution placed at the eye itself:
+        """PSNR and colour ({"rgba"}) of a mesh-baked probe of the same resolution at the eye itself:
         what this view would score with no distance to travel (the control that removes what the
         eye sees from the comparison between positions)."""
         key = (view.name, tuple(eye), resolution)
         if key not in self._controls:
             folder, _, _ = self._mesh_probe(eye, resolution)
             image, _ = self.ctx.render_probes(self.ctx.native.ProbeField.load(folder), camera, DEFAULT_TRACE[1])
-            self._controls[key] = (psnr_only(gt, image), image)
+            # Its colour alone is kept (what psnr_seen_as reads): the full image, depth, normals and
+            # the rest, would hold every eye's planes until the sweep ends.
+            self._controls[key] = (psnr_only(gt, image), {"rgba": image["rgba"]})
         return self._controls[key]
 
     def _mesh_probe(self, eye: Sequence[float], resolution: int) -> Tuple[str, float, float]:
