@@ -402,9 +402,13 @@ private:
 }
 
 // Parses the point lines of [range.begin, range.end) into the chunk's slice of `arrays`. Stops
-// at the first problem, which it records with its byte offset rather than throwing.
+// at the first problem, which it records with its byte offset rather than throwing. `kEnd`:
+// RangeEnd::Newline where the range ends with a newline (every chunk but a last one whose file
+// does not), which ends every run the loops scan.
+template <RangeEnd kEnd>
 void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, TextDialect dialect,
                  const PointArrays& arrays, ChunkPoints& out) {
+    constexpr bool kNewline = kEnd == RangeEnd::Newline;
     const std::size_t column_count = prefix.channels.size();
     const ChannelLayout& layout = prefix.layout;
     const auto ix = static_cast<std::size_t>(layout.index(Channel::X));
@@ -437,7 +441,7 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
 
     while (p < end) {
         const char* const line_start = p;
-        while (p < end && (*p == ' ' || *p == '\t')) {
+        while ((kNewline || p < end) && (*p == ' ' || *p == '\t')) {
             ++p;
         }
         if (p < end &&
@@ -449,15 +453,16 @@ void parse_chunk(const char* data, ByteRange range, const TextPrefix& prefix, Te
 
         std::size_t column = 0;
         while (true) {
-            while (p < end && is_separator(*p)) {
+            while ((kNewline || p < end) && is_separator(*p)) {
                 ++p;
             }
-            if (p == end || *p == '\n') {
+            if ((!kNewline && p == end) || *p == '\n') {
                 break;
             }
             double value = 0.0;
-            const char* after = parse_double(p, end, value);
-            if (after == nullptr || (after < end && *after != '\n' && !is_separator(*after))) {
+            const char* after = parse_double<kEnd>(p, end, value);
+            if (after == nullptr ||
+                ((kNewline || after < end) && *after != '\n' && !is_separator(*after))) {
                 fail(p, "non-numeric field " + in_quotes(token_at(p, end)) + " in " +
                             column_label(column, prefix.channels) + ": expected a number");
                 out.count = index - out.first;
@@ -697,7 +702,12 @@ void close_gaps(std::vector<T>& values, const std::vector<ChunkPoints>& chunks) 
             progress->throw_if_cancelled();
         }
         ChunkPoints& chunk = chunks[i];
-        parse_chunk(file.data(), ranges[i], prefix, dialect, arrays, chunk);
+        const ByteRange range = ranges[i];
+        if (file.data()[range.end - 1] == '\n') {
+            parse_chunk<RangeEnd::Newline>(file.data(), range, prefix, dialect, arrays, chunk);
+        } else {
+            parse_chunk<RangeEnd::Bounded>(file.data(), range, prefix, dialect, arrays, chunk);
+        }
         // A value above 1 makes the whole file's colours 0-255 integers: decoded now, while
         // they are in cache; the rest once the file's largest value is known.
         if (arrays.colours != nullptr && chunk.max_colour > 1.0 && !chunk.failure.failed) {
