@@ -19,8 +19,10 @@
 #include <glm/geometric.hpp>
 #include <glm/vector_relational.hpp>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include "lfprobe/error.hpp"
+#include "lfprobe/huge_pages.hpp"
 #include "lfprobe/morton.hpp"
 
 #include "cpu_features.hpp"
@@ -479,6 +481,14 @@ private:
     int block_shift_ = -1;
 };
 
+// `n` values left unset until written on all cores, in huge pages where the kernel gives them.
+template <class T>
+std::unique_ptr<T[]> unset_in_huge_pages(std::size_t n) {
+    std::unique_ptr<T[]> values = std::make_unique_for_overwrite<T[]>(n);
+    advise_huge_pages(values.get(), n * sizeof(T));
+    return values;
+}
+
 // A point's SurfaceEdge from `to_mean`, the offset of its neighbours' mean: the part of it in
 // the tangent plane of `normal` (all of it without a normal), in spacings.
 SurfaceEdge surface_edge(const glm::dvec3& to_mean, const glm::vec3& normal, float spacing) {
@@ -651,13 +661,18 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
     }
     const std::size_t n = cloud.size();
     LocalGeometry result;
-    result.normals.assign(n, glm::vec3(0.0f));
-    result.spacing.assign(n, 0.0f);
-    result.oriented.assign(n, 0);
-    result.edges.assign(n, SurfaceEdge{});
     if (n == 0) {
         return result;
     }
+    // Every array is written whole at the end, at random places: sized side by side (zeroing
+    // 210 MB for 10 M points on one thread took 0.11 s) and in huge pages, so that the random
+    // writes do not miss the TLB at every point.
+    tbb::parallel_invoke([&] { resize_in_huge_pages(result.normals, n); },
+                         [&] {
+                             resize_in_huge_pages(result.spacing, n);
+                             resize_in_huge_pages(result.oriented, n);
+                         },
+                         [&] { resize_in_huge_pages(result.edges, n); });
     if (progress != nullptr) {
         progress->begin_stage("indexing points", 1);
     }
@@ -670,18 +685,25 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
     // those misses are in flight at once.
     // Left unset until written on all cores (every element is): zeroing them first on one
     // thread, 330 MB for 10 M points, took a twentieth of the estimate.
-    const auto positions = std::make_unique_for_overwrite<glm::vec3[]>(n);
-    const auto scan_of = std::make_unique_for_overwrite<std::uint32_t[]>(n);
-    tbb::parallel_for(std::size_t{0}, n, [&](std::size_t j) {
-        positions[j] = cloud.positions[sorted.order[j]];
-        scan_of[j] = cloud.scan_index[sorted.order[j]];
-    });
-    const auto normals_in_order = std::make_unique_for_overwrite<glm::vec3[]>(n);
-    const auto spacing_in_order = std::make_unique_for_overwrite<float[]>(n);
-    const auto oriented_in_order = std::make_unique_for_overwrite<std::uint8_t[]>(n);
-    std::vector<SurfaceEdge> edges_in_order(n);
+    const auto positions = unset_in_huge_pages<glm::vec3>(n);
+    const auto scan_of = unset_in_huge_pages<std::uint32_t>(n);
+    const auto normals_in_order = unset_in_huge_pages<glm::vec3>(n);
+    const auto spacing_in_order = unset_in_huge_pages<float>(n);
+    const auto oriented_in_order = unset_in_huge_pages<std::uint8_t>(n);
+    std::vector<SurfaceEdge> edges_in_order;
     std::vector<Leaf> leaves;
-    split_into_leaves(sorted.keys, 0, static_cast<std::uint32_t>(n), morton::kBitsPerAxis, leaves);
+    tbb::parallel_invoke(
+        [&] {
+            tbb::parallel_for(std::size_t{0}, n, [&](std::size_t j) {
+                positions[j] = cloud.positions[sorted.order[j]];
+                scan_of[j] = cloud.scan_index[sorted.order[j]];
+            });
+        },
+        [&] { resize_in_huge_pages(edges_in_order, n); },
+        [&] {
+            split_into_leaves(sorted.keys, 0, static_cast<std::uint32_t>(n), morton::kBitsPerAxis,
+                              leaves);
+        });
     if (progress != nullptr) {
         progress->throw_if_cancelled();
         progress->begin_stage("estimating normals and spacing", n);
