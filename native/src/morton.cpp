@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <atomic>
+#include <bit>
 #include <limits>
 #include <memory>
 #include <utility>
@@ -75,10 +76,11 @@ std::unique_ptr<Keyed[]> keyed_buffer(std::size_t n) {
 }
 
 // Sorts the pairs of one bucket, whose keys agree above bit `shift` and which arrive in index
-// order. A bucket of a room cloud holds a few thousand points; std::sort's comparisons and
-// mispredicted branches over them were a third of sorting the cloud. A counting sort on the
-// next kSubBits bits of the key (stable, so each run of equal bits stays in index order) leaves
-// runs of a few pairs, which an insertion sort on the whole pair puts in order.
+// order. A bucket of a room cloud holds a few hundred to a few thousand points; std::sort's
+// comparisons and mispredicted branches over them were a third of sorting the cloud. A counting
+// sort on the key's next bits (about as many sub-buckets as pairs; stable, so each run of equal
+// bits stays in index order) leaves runs of a few pairs, which an insertion sort on the whole
+// pair puts in order.
 class BucketSorter {
 public:
     void sort(Keyed* first, Keyed* last, int shift) {
@@ -87,33 +89,37 @@ public:
             insertion_sort(first, last, n);
             return;
         }
-        const int low = std::max(shift - kSubBits, 0);
-        const std::uint64_t mask = (std::uint64_t{1} << (shift - low)) - 1;
-        counts_.fill(0);
+        const int bits = std::min({shift, kMaxSubBits, static_cast<int>(std::bit_width(n)) + 1});
+        const int low = shift - bits;
+        const std::size_t sub_buckets = std::size_t{1} << bits;
+        const std::uint64_t mask = sub_buckets - 1;
+        // counts_[s + 1] counts sub-bucket s; summed, counts_[s] is where s starts, and after
+        // the scatter (which advances it) where s ends.
+        std::fill(counts_.begin(), counts_.begin() + static_cast<std::ptrdiff_t>(sub_buckets) + 1,
+                  0u);
         for (std::size_t i = 0; i < n; ++i) {
             ++counts_[((first[i].key >> low) & mask) + 1];
         }
-        for (std::size_t s = 1; s < counts_.size(); ++s) {
+        for (std::size_t s = 1; s <= sub_buckets; ++s) {
             counts_[s] += counts_[s - 1];
         }
         scratch_.resize(n);
-        std::array<std::uint32_t, kSubBuckets + 1> next = counts_;
         for (std::size_t i = 0; i < n; ++i) {
-            scratch_[next[(first[i].key >> low) & mask]++] = first[i];
+            scratch_[counts_[(first[i].key >> low) & mask]++] = first[i];
         }
         std::copy(scratch_.begin(), scratch_.end(), first);
-        for (std::size_t s = 0; s < kSubBuckets; ++s) {
-            const std::uint32_t begin = counts_[s];
-            const std::uint32_t end = counts_[s + 1];
+        std::uint32_t begin = 0;
+        for (std::size_t s = 0; s < sub_buckets; ++s) {
+            const std::uint32_t end = counts_[s];
             if (end - begin > 1) {
                 insertion_sort(first + begin, first + end, end - begin);
             }
+            begin = end;
         }
     }
 
 private:
-    static constexpr int kSubBits = 12;
-    static constexpr std::size_t kSubBuckets = std::size_t{1} << kSubBits;
+    static constexpr int kMaxSubBits = 12;
     static constexpr std::size_t kSmallBucket = 48;
 
     static void insertion_sort(Keyed* first, Keyed* last, std::size_t n) {
@@ -132,7 +138,7 @@ private:
         }
     }
 
-    std::array<std::uint32_t, kSubBuckets + 1> counts_{};
+    std::array<std::uint32_t, (std::size_t{1} << kMaxSubBits) + 1> counts_{};
     std::vector<Keyed> scratch_;
 };
 
