@@ -306,6 +306,26 @@ private:
     std::size_t size_ = 0;
 };
 
+// The 27 cells of a block around its middle one, the middle first, then its face, edge and
+// corner neighbours (each ring in z, y, x order): the nearest candidates come first, so the
+// rest are mostly turned away by their cell's distance alone.
+constexpr std::array<glm::i8vec3, 27> kBlockOffsets = [] {
+    std::array<glm::i8vec3, 27> offsets{};
+    std::size_t next = 0;
+    for (int ring = 0; ring <= 3; ++ring) {
+        for (int dz = -1; dz <= 1; ++dz) {
+            for (int dy = -1; dy <= 1; ++dy) {
+                for (int dx = -1; dx <= 1; ++dx) {
+                    if ((dx < 0 ? -dx : dx) + (dy < 0 ? -dy : dy) + (dz < 0 ? -dz : dz) == ring) {
+                        offsets[next++] = glm::i8vec3(dx, dy, dz);
+                    }
+                }
+            }
+        }
+    }
+    return offsets;
+}();
+
 // Searches the k nearest points of the sorted point `j` among the 3×3×3 block of cells of
 // level `shift` around its own, growing the block a level at a time until the k-th nearest
 // lies closer than the block's nearest face (then nothing outside can be nearer) or the block
@@ -316,38 +336,48 @@ public:
         : sorted_(sorted), positions_(positions), vectors_(vectors),
           scratch_(2 * few_keys_sort::kMaxKeys) {}
 
-    // The runs of sorted points in the block of level `shift` around the cell `cell`, the cell
-    // itself first, then its face, edge and corner neighbours: the nearest candidates come
-    // first, so the rest are mostly turned away by their cell's distance alone.
+    // The runs of sorted points in the block of level `shift` around the cell `cell`, in the
+    // order of kBlockOffsets.
     void gather(const glm::u64vec3& cell, int shift, std::uint32_t hint) {
         runs_.clear();
         const auto cells =
             static_cast<std::int64_t>(std::uint64_t{1} << (morton::kBitsPerAxis - shift));
-        for (int ring = 0; ring <= 3; ++ring) {
-            for (int dz = -1; dz <= 1; ++dz) {
-                for (int dy = -1; dy <= 1; ++dy) {
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        if (std::abs(dx) + std::abs(dy) + std::abs(dz) != ring) {
-                            continue;
-                        }
-                        const glm::i64vec3 c = glm::i64vec3(cell) + glm::i64vec3(dx, dy, dz);
-                        if (glm::any(glm::lessThan(c, glm::i64vec3(0))) ||
-                            glm::any(glm::greaterThanEqual(c, glm::i64vec3(cells)))) {
-                            continue; // outside the cube: no points there
-                        }
-                        const auto [b, e] = run_of(morton::key(static_cast<std::uint64_t>(c.x),
-                                                               static_cast<std::uint64_t>(c.y),
-                                                               static_cast<std::uint64_t>(c.z)),
-                                                   shift, hint);
-                        if (b < e) {
-                            runs_.push_back({b, e, glm::i8vec3(dx, dy, dz)});
-                        }
-                    }
-                }
+        // Each axis's three coordinates in the block, spread to their place in a key once (nine
+        // spreads of 21 bits, where a key per cell took 81), and whether they lie in the cube
+        // (outside it there are no points).
+        std::array<std::array<std::uint64_t, 3>, 3> spread{};
+        std::array<std::array<bool, 3>, 3> inside{};
+        for (std::size_t a = 0; a < 3; ++a) {
+            for (std::size_t d = 0; d < 3; ++d) {
+                const std::int64_t c =
+                    static_cast<std::int64_t>(cell[static_cast<int>(a)]) + static_cast<int>(d) - 1;
+                inside[a][d] = c >= 0 && c < cells;
+                spread[a][d] =
+                    inside[a][d] ? morton::spread_bits(static_cast<std::uint64_t>(c)) << a : 0;
+            }
+        }
+        for (const glm::i8vec3& offset : kBlockOffsets) {
+            const auto x = static_cast<std::size_t>(offset.x + 1);
+            const auto y = static_cast<std::size_t>(offset.y + 1);
+            const auto z = static_cast<std::size_t>(offset.z + 1);
+            if (!inside[0][x] || !inside[1][y] || !inside[2][z]) {
+                continue;
+            }
+            const auto [b, e] = run_of(spread[0][x] | spread[1][y] | spread[2][z], shift, hint);
+            if (b < e) {
+                runs_.push_back({b, e, offset});
             }
         }
         block_cell_ = cell;
         block_shift_ = shift;
+        // Room for every point of the block, so that a search need not check as it collects.
+        std::size_t points = 0;
+        for (const Run& run : runs_) {
+            points += run.end - run.begin;
+        }
+        if (scratch_.size() < points + kCollectPadding) {
+            scratch_.resize(2 * (points + kCollectPadding));
+        }
     }
 
     // The sorted points of cell `cell_key` at level `shift`, remembered: the next leaf along the
@@ -374,22 +404,21 @@ public:
         const glm::vec3 local = p - sorted_.origin;
         const glm::vec3 below = local - glm::vec3(block_cell_) * h;
         const glm::vec3 above = glm::vec3(h) - below;
+        // The squared gap to a neighbouring cell along each axis, by the cell's offset (-1, 0,
+        // +1): summed per cell in axis order, the same sums as gap by gap, without a branch.
+        std::array<std::array<float, 3>, 3> gaps{};
+        for (int a = 0; a < 3; ++a) {
+            gaps[a][0] = below[a] > 0.0f ? below[a] * below[a] : 0.0f;
+            gaps[a][2] = above[a] > 0.0f ? above[a] * above[a] : 0.0f;
+        }
         std::size_t count = 0;
         for (const Run& run : runs_) {
-            float gap2 = 0.0f;
-            for (int a = 0; a < 3; ++a) {
-                const float gap = run.offset[a] < 0   ? below[a]
-                                  : run.offset[a] > 0 ? above[a]
-                                                      : 0.0f;
-                gap2 += gap > 0.0f ? gap * gap : 0.0f;
-            }
+            const float gap2 = gaps[0][static_cast<std::size_t>(run.offset.x + 1)] +
+                               gaps[1][static_cast<std::size_t>(run.offset.y + 1)] +
+                               gaps[2][static_cast<std::size_t>(run.offset.z + 1)];
             // Strictly beyond: a point at the limit itself is still collected.
             if (gap2 > limit) {
                 continue;
-            }
-            const std::size_t room = count + (run.end - run.begin) + kCollectPadding;
-            if (scratch_.size() < room) {
-                scratch_.resize(2 * room);
             }
             count = NearestSet::collect(positions_, run.begin, run.end,
                                         static_cast<std::uint32_t>(sorted_.keys.size()), p, limit,
