@@ -22,7 +22,6 @@
 #include <tbb/parallel_invoke.h>
 
 #include "lfprobe/error.hpp"
-#include "lfprobe/huge_pages.hpp"
 #include "lfprobe/morton.hpp"
 
 #include "cpu_features.hpp"
@@ -510,14 +509,6 @@ private:
     int block_shift_ = -1;
 };
 
-// `n` values left unset until written on all cores, in huge pages where the kernel gives them.
-template <class T>
-std::unique_ptr<T[]> unset_in_huge_pages(std::size_t n) {
-    std::unique_ptr<T[]> values = std::make_unique_for_overwrite<T[]>(n);
-    advise_huge_pages(values.get(), n * sizeof(T));
-    return values;
-}
-
 // A point's SurfaceEdge from `to_mean`, the offset of its neighbours' mean: the part of it in
 // the tangent plane of `normal` (all of it without a normal), in spacings.
 SurfaceEdge surface_edge(const glm::dvec3& to_mean, const glm::vec3& normal, float spacing) {
@@ -693,15 +684,16 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
     if (n == 0) {
         return result;
     }
-    // Every array is written whole at the end, at random places: sized side by side (zeroing
-    // 210 MB for 10 M points on one thread took 0.11 s) and in huge pages, so that the random
-    // writes do not miss the TLB at every point.
-    tbb::parallel_invoke([&] { resize_in_huge_pages(result.normals, n); },
+    // Sized side by side: zeroing 210 MB for 10 M points on one thread took 0.11 s. (Not
+    // advised for huge pages, nor are the arrays below: the estimate runs once per cloud, and a
+    // first fault of huge pages waits while the kernel compacts memory the page cache has
+    // fragmented: 0.4-0.7 s more for 10 M points, repaid only when the memory is reused.)
+    tbb::parallel_invoke([&] { result.normals.resize(n); },
                          [&] {
-                             resize_in_huge_pages(result.spacing, n);
-                             resize_in_huge_pages(result.oriented, n);
+                             result.spacing.resize(n);
+                             result.oriented.resize(n);
                          },
-                         [&] { resize_in_huge_pages(result.edges, n); });
+                         [&] { result.edges.resize(n); });
     if (progress != nullptr) {
         progress->begin_stage("indexing points", 1);
     }
@@ -714,11 +706,11 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
     // those misses are in flight at once.
     // Left unset until written on all cores (every element is): zeroing them first on one
     // thread, 330 MB for 10 M points, took a twentieth of the estimate.
-    const auto positions = unset_in_huge_pages<glm::vec3>(n);
-    const auto scan_of = unset_in_huge_pages<std::uint32_t>(n);
-    const auto normals_in_order = unset_in_huge_pages<glm::vec3>(n);
-    const auto spacing_in_order = unset_in_huge_pages<float>(n);
-    const auto oriented_in_order = unset_in_huge_pages<std::uint8_t>(n);
+    const auto positions = std::make_unique_for_overwrite<glm::vec3[]>(n);
+    const auto scan_of = std::make_unique_for_overwrite<std::uint32_t[]>(n);
+    const auto normals_in_order = std::make_unique_for_overwrite<glm::vec3[]>(n);
+    const auto spacing_in_order = std::make_unique_for_overwrite<float[]>(n);
+    const auto oriented_in_order = std::make_unique_for_overwrite<std::uint8_t[]>(n);
     std::vector<SurfaceEdge> edges_in_order;
     std::vector<Leaf> leaves;
     tbb::parallel_invoke(
@@ -728,7 +720,7 @@ LocalGeometry estimate_local_geometry(const PointCloud& cloud, const LocalGeomet
                 scan_of[j] = cloud.scan_index[sorted.order[j]];
             });
         },
-        [&] { resize_in_huge_pages(edges_in_order, n); },
+        [&] { edges_in_order.resize(n); },
         [&] {
             split_into_leaves(sorted.keys, 0, static_cast<std::uint32_t>(n), morton::kBitsPerAxis,
                               leaves);
