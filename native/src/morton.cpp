@@ -12,6 +12,7 @@
 #include <glm/common.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 #include <tbb/parallel_reduce.h>
 
 namespace lfprobe::morton {
@@ -244,8 +245,8 @@ SortedPoints sort_points(const std::vector<glm::vec3>& positions) {
         keyed[i] = {frame.key_of(positions[i]), static_cast<std::uint32_t>(i)};
     });
     sort_keyed(keyed, n);
-    sorted.keys.resize(n);
-    sorted.order.resize(n);
+    // Sized side by side: each is zeroed as it is sized (120 MB for 10 M points).
+    tbb::parallel_invoke([&] { sorted.keys.resize(n); }, [&] { sorted.order.resize(n); });
     tbb::parallel_for(std::size_t{0}, n, [&](std::size_t j) {
         sorted.keys[j] = keyed[j].key;
         sorted.order[j] = keyed[j].index;
