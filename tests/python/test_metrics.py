@@ -183,6 +183,39 @@ def test_compare_images_measures_colour_as_rendered_and_counts_holes_by_status()
     assert set(metrics.DEFINITIONS) <= set(result["definitions"])
 
 
+def test_a_prepared_reference_gives_the_same_bits_and_refuses_another_reference():
+    # The report compares each ground truth with many renders: its half of SSIM and FLIP is made
+    # once (metrics.PreparedColour). Every figure and the FLIP map stay the same bits.
+    h, w = 40, 56
+    ref_rgb, tests = _pairs(h, w)
+    depth = np.full((h, w), 2.0, np.float32)
+    status = np.ones((h, w), np.uint8)
+
+    def image(rgb):
+        rgba = np.concatenate([rgb, np.ones((h, w, 1))], axis=-1).astype(np.float32)
+        return {"rgba": rgba, "depth": depth, "status": status}
+
+    ref = image(ref_rgb)
+    for ppd in (20.0, 67.0):
+        prepared = metrics.PreparedColour(ref, ppd)
+        for name, test_rgb in tests.items():
+            plain, plain_map = metrics.compare_images_with_map(ref, image(test_rgb), ppd)
+            figures, error_map = metrics.compare_images_with_map(ref, image(test_rgb), ppd, prepared=prepared)
+            for key in ("psnr", "ssim", "flip", "psnr_answered", "depth_absrel"):
+                assert figures[key] == plain[key], (name, ppd, key)
+            assert np.array_equal(error_map, plain_map), (name, ppd)
+    # Made from another image (even an equal one) or at another ppd: refused, not silently used.
+    with pytest.raises(ValueError, match="another reference"):
+        metrics.compare_images_with_map(image(ref_rgb), ref, 67.0, prepared=metrics.PreparedColour(ref, 67.0))
+    with pytest.raises(ValueError, match="another reference"):
+        metrics.compare_images_with_map(ref, ref, 20.0, prepared=metrics.PreparedColour(ref, 67.0))
+    # A reference under SSIM's window: no SSIM, as without preparing.
+    small = image(ref_rgb)
+    small = {key: value[:8, :8] for key, value in small.items()}
+    figures, _ = metrics.compare_images_with_map(small, small, 67.0, prepared=metrics.PreparedColour(small, 67.0))
+    assert figures["ssim"] is None and figures["psnr"] == float("inf")
+
+
 # -- compare on EXRs ----------------------------------------------------------------------------
 
 REQUIRED_KEYS = {"psnr", "ssim", "flip", "depth_absrel", "depth_rmse", "hole_rate", "false_hit_rate",

@@ -192,7 +192,11 @@ def _filtered_hunt_lab(ycxcz: np.ndarray, filters) -> np.ndarray:
 def color_difference(ref_ycxcz: np.ndarray, test_ycxcz: np.ndarray, ppd: float) -> np.ndarray:
     """ΔE_c in [0, 1]: the redistributed HyAB^qc distance of the CSF-filtered images."""
     filters = spatial_filters(ppd)
-    distance = hyab(_filtered_hunt_lab(ref_ycxcz, filters), _filtered_hunt_lab(test_ycxcz, filters)) ** QC
+    return _color_difference_of(_filtered_hunt_lab(ref_ycxcz, filters), _filtered_hunt_lab(test_ycxcz, filters))
+
+
+def _color_difference_of(ref_hunt_lab: np.ndarray, test_hunt_lab: np.ndarray) -> np.ndarray:
+    distance = hyab(ref_hunt_lab, test_hunt_lab) ** QC
     cmax = max_color_distance()
     pccmax = PC * cmax
     return np.where(distance < pccmax, distance * (PT / pccmax),
@@ -212,25 +216,67 @@ def _features(luminance: np.ndarray, filters) -> Tuple[np.ndarray, np.ndarray]:
 def feature_difference(ref_ycxcz: np.ndarray, test_ycxcz: np.ndarray, ppd: float) -> np.ndarray:
     """ΔE_f in [0, 1]: (max(|Δedge|, |Δpoint|)/sqrt(2))^qf on luminance (Y + 16)/116."""
     filters = feature_filters(ppd)
-    edges_ref, points_ref = _features((ref_ycxcz[..., 0] + 16.0) / 116.0, filters)
-    edges_test, points_test = _features((test_ycxcz[..., 0] + 16.0) / 116.0, filters)
+    return _feature_difference_of(_features((ref_ycxcz[..., 0] + 16.0) / 116.0, filters),
+                                  _features((test_ycxcz[..., 0] + 16.0) / 116.0, filters))
+
+
+def _feature_difference_of(ref_features: Tuple[np.ndarray, np.ndarray],
+                           test_features: Tuple[np.ndarray, np.ndarray]) -> np.ndarray:
+    (edges_ref, points_ref), (edges_test, points_test) = ref_features, test_features
     diff = np.maximum(np.abs(edges_ref - edges_test), np.abs(points_ref - points_test))
     return (diff / math.sqrt(2.0)) ** QF
+
+
+class PreparedReference:
+    """The reference's half of FLIP at one ppd (its YCxCz, CSF-filtered Hunt Lab, edges and
+    points), computed once for every test image compared with it: a report compares each ground
+    truth with many renders, and this half was about half of each comparison's FLIP."""
+
+    def __init__(self, ref_srgb: np.ndarray, ppd: float = DEFAULT_PPD):
+        ref = np.asarray(ref_srgb, dtype=np.float64)
+        _check_flip_input(ref, ref, ppd)
+        self.ppd = float(ppd)
+        self.shape = ref.shape
+        ycxcz = _ycxcz_of(ref)
+        self.hunt_lab = _filtered_hunt_lab(ycxcz, spatial_filters(ppd))
+        self.features = _features((ycxcz[..., 0] + 16.0) / 116.0, feature_filters(ppd))
 
 
 def flip_error_map(ref_srgb: np.ndarray, test_srgb: np.ndarray, ppd: float = DEFAULT_PPD) -> np.ndarray:
     """Per-pixel LDR-FLIP error (h, w) in [0, 1] between sRGB images (h, w, 3) in [0, 1]."""
     ref = np.asarray(ref_srgb, dtype=np.float64)
     test = np.asarray(test_srgb, dtype=np.float64)
+    _check_flip_input(ref, test, ppd)
+    ref_ycxcz, test_ycxcz = _ycxcz_of(ref), _ycxcz_of(test)
+    delta_c = color_difference(ref_ycxcz, test_ycxcz, ppd)
+    delta_f = feature_difference(ref_ycxcz, test_ycxcz, ppd)
+    return np.power(delta_c, 1.0 - delta_f)
+
+
+def flip_error_map_against(reference: PreparedReference, test_srgb: np.ndarray) -> np.ndarray:
+    """flip_error_map(the reference's image, test_srgb, its ppd), bit for bit, with the
+    reference's half computed once (PreparedReference)."""
+    test = np.asarray(test_srgb, dtype=np.float64)
+    if test.shape != reference.shape:
+        raise ValueError(f"FLIP needs two (h, w, 3) images of one size, got {reference.shape} and {test.shape}")
+    test_ycxcz = _ycxcz_of(test)
+    delta_c = _color_difference_of(reference.hunt_lab,
+                                   _filtered_hunt_lab(test_ycxcz, spatial_filters(reference.ppd)))
+    delta_f = _feature_difference_of(reference.features,
+                                     _features((test_ycxcz[..., 0] + 16.0) / 116.0,
+                                               feature_filters(reference.ppd)))
+    return np.power(delta_c, 1.0 - delta_f)
+
+
+def _check_flip_input(ref: np.ndarray, test: np.ndarray, ppd: float) -> None:
     if ref.shape != test.shape or ref.ndim != 3 or ref.shape[2] != 3:
         raise ValueError(f"FLIP needs two (h, w, 3) images of one size, got {ref.shape} and {test.shape}")
     if ppd <= 0:
         raise ValueError(f"pixels per degree must be positive, got {ppd}")
-    ref_ycxcz = linear_rgb_to_ycxcz(srgb_to_linear(np.clip(ref, 0.0, 1.0)))
-    test_ycxcz = linear_rgb_to_ycxcz(srgb_to_linear(np.clip(test, 0.0, 1.0)))
-    delta_c = color_difference(ref_ycxcz, test_ycxcz, ppd)
-    delta_f = feature_difference(ref_ycxcz, test_ycxcz, ppd)
-    return np.power(delta_c, 1.0 - delta_f)
+
+
+def _ycxcz_of(srgb: np.ndarray) -> np.ndarray:
+    return linear_rgb_to_ycxcz(srgb_to_linear(np.clip(srgb, 0.0, 1.0)))
 
 
 def flip(ref_srgb: np.ndarray, test_srgb: np.ndarray, ppd: float = DEFAULT_PPD) -> Tuple[float, np.ndarray]:

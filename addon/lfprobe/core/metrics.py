@@ -102,16 +102,32 @@ def ssim_map(ref_srgb: np.ndarray, test_srgb: np.ndarray) -> np.ndarray:
     x = np.asarray(ref_srgb, dtype=np.float64)
     y = np.asarray(test_srgb, dtype=np.float64)
     _check_pair(x, y)
-    if x.ndim == 2:
-        x, y = x[..., None], y[..., None]
-    if min(x.shape[0], x.shape[1]) < SSIM_WINDOW:
-        raise ValueError(f"SSIM needs images of at least {SSIM_WINDOW}×{SSIM_WINDOW} pixels, got "
-                         f"{x.shape[1]}×{x.shape[0]}")
+    return _ssim_map_against(_SsimSide(x), y)
+
+
+class _SsimSide:
+    """One image's local means and variances under the SSIM window: a reference's are made once
+    for every image compared with it (PreparedColour)."""
+
+    def __init__(self, image: np.ndarray):
+        x = image[..., None] if image.ndim == 2 else image
+        if min(x.shape[0], x.shape[1]) < SSIM_WINDOW:
+            raise ValueError(f"SSIM needs images of at least {SSIM_WINDOW}×{SSIM_WINDOW} pixels, got "
+                             f"{x.shape[1]}×{x.shape[0]}")
+        g = _gaussian_window_1d()
+        self.shape = image.shape
+        self.x = x
+        self.mu = _valid_filter(x, g)
+        self.var = _valid_filter(x * x, g) - self.mu * self.mu
+
+
+def _ssim_map_against(ref: _SsimSide, test_srgb: np.ndarray) -> np.ndarray:
+    y = test_srgb[..., None] if test_srgb.ndim == 2 else test_srgb
     g = _gaussian_window_1d()
-    mu_x, mu_y = _valid_filter(x, g), _valid_filter(y, g)
-    var_x = _valid_filter(x * x, g) - mu_x * mu_x
+    mu_x, var_x = ref.mu, ref.var
+    mu_y = _valid_filter(y, g)
     var_y = _valid_filter(y * y, g) - mu_y * mu_y
-    cov_xy = _valid_filter(x * y, g) - mu_x * mu_y
+    cov_xy = _valid_filter(ref.x * y, g) - mu_x * mu_y
     c1, c2 = SSIM_K1**2, SSIM_K2**2  # data range 1
     return ((2 * mu_x * mu_y + c1) * (2 * cov_xy + c2)) / ((mu_x**2 + mu_y**2 + c1) * (var_x + var_y + c2))
 
@@ -275,34 +291,69 @@ def compare_images(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
     return compare_images_with_map(ref, test, ppd)[0]
 
 
-def _colour_figures(ref_rgb: np.ndarray, test_rgb: np.ndarray,
-                    ppd: float) -> Tuple[Dict[str, object], np.ndarray]:
+class PreparedColour:
+    """A reference image's half of psnr, ssim and flip at one ppd (its sRGB encoding, SSIM
+    window statistics and FLIP filters), made once for every image compared with it: the report
+    compares each ground truth with many renders. The figures are the same bits as without it."""
+
+    def __init__(self, ref: Dict[str, np.ndarray], ppd: float = _flip.DEFAULT_PPD):
+        self.image = ref
+        self.ppd = float(ppd)
+        self.rgb = visible_colour(ref)
+        self.encoded = srgb_encode(self.rgb)
+        try:
+            self.ssim: Optional[_SsimSide] = _SsimSide(self.encoded)
+        except ValueError:
+            self.ssim = None
+        self.flip = _flip.PreparedReference(self.encoded, ppd)
+
+    def serves(self, ref: Dict[str, np.ndarray], ppd: float) -> bool:
+        """Whether this was prepared from `ref` itself (the same object) at `ppd`."""
+        return self.image is ref and self.ppd == float(ppd)
+
+
+def _colour_figures(ref_rgb: np.ndarray, test_rgb: np.ndarray, ppd: float,
+                    prepared: Optional[PreparedColour] = None) -> Tuple[Dict[str, object], np.ndarray]:
     """({psnr, ssim, flip}, FLIP error map) of two colour images; ssim None under its window.
-    Each image is sRGB-encoded once for the three (what psnr, ssim and flip each do)."""
-    ref, test = srgb_encode(ref_rgb), srgb_encode(test_rgb)
-    try:
-        ssim_value: Optional[float] = _ssim_encoded(ref, test)
-    except ValueError:
-        ssim_value = None
-    flip_mean, error_map = _flip.flip(ref, test, ppd)
-    return {"psnr": _psnr_encoded(ref, test), "ssim": ssim_value, "flip": flip_mean}, error_map
+    Each image is sRGB-encoded once for the three (what psnr, ssim and flip each do); with
+    `prepared` (made from the reference at this ppd), the reference's half is not made again."""
+    test = srgb_encode(test_rgb)
+    if prepared is None:
+        prepared_ref = srgb_encode(ref_rgb)
+        try:
+            ssim_value: Optional[float] = _ssim_encoded(prepared_ref, test)
+        except ValueError:
+            ssim_value = None
+        flip_mean, error_map = _flip.flip(prepared_ref, test, ppd)
+        return {"psnr": _psnr_encoded(prepared_ref, test), "ssim": ssim_value, "flip": flip_mean}, error_map
+    _check_pair(prepared.encoded, test)
+    ssim_value = (None if prepared.ssim is None
+                  else float(_ssim_map_against(prepared.ssim, test).mean(axis=(0, 1)).mean()))
+    error_map = _flip.flip_error_map_against(prepared.flip, test)
+    return ({"psnr": _psnr_encoded(prepared.encoded, test), "ssim": ssim_value,
+             "flip": float(error_map.mean())}, error_map)
 
 
 def compare_images_with_map(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
-                            ppd: float = _flip.DEFAULT_PPD) -> Tuple[Dict[str, object], np.ndarray]:
+                            ppd: float = _flip.DEFAULT_PPD,
+                            prepared: Optional[PreparedColour] = None) -> Tuple[Dict[str, object], np.ndarray]:
     """(metrics, FLIP error map) between a ground-truth and a test image (read_image dicts of one size).
 
     Colour metrics (psnr, ssim, flip) use every pixel's colour as rendered (visible_colour). ssim is None for images under 11 pixels on a side. Returns psnr, ssim, flip,
     depth_absrel, depth_rmse, depth_pixels, psnr_answered, wrong_surface_rate, hole_rate, false_hit_rate, false_miss_rate,
-    unknown_rate, counts, width, height, ppd and the definitions of all of them.
+    unknown_rate, counts, width, height, ppd and the definitions of all of them. `prepared`: the
+    reference's PreparedColour at this ppd, for a reference compared with many images.
     """
+    if prepared is not None and not prepared.serves(ref, ppd):
+        raise ValueError("compare: the prepared colour was made from another reference or ppd")
     if ref["rgba"].shape != test["rgba"].shape:
         h0, w0 = ref["rgba"].shape[:2]
         h1, w1 = test["rgba"].shape[:2]
         raise ValueError(f"images differ in size: reference {w0}×{h0}, test {w1}×{h1}")
     height, width = ref["rgba"].shape[:2]
-    ref_rgb, test_rgb = visible_colour(ref), visible_colour(test)
-    result, error_map = _colour_figures(ref_rgb, test_rgb, ppd)
+    ref_rgb = visible_colour(ref) if prepared is None else prepared.rgb
+    test_rgb = visible_colour(test)
+    result, error_map = _colour_figures(ref_rgb, test_rgb, ppd, prepared)
     ref_hit, test_hit = ref["status"] == STATUS_HIT, test["status"] == STATUS_HIT
     depth = depth_errors(ref["depth"], test["depth"], ref_hit, test_hit)
     result.update({

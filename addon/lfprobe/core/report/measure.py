@@ -9,6 +9,7 @@ import os
 import shutil
 import sys
 import time
+from collections import OrderedDict
 from typing import Callable, Dict, List, Optional, Sequence, Tuple
 
 import numpy as np
@@ -112,6 +113,7 @@ class RunContext:
         return best_image, best
 
     def cleanup(self, keep: bool) -> None:
+        forget_prepared_references()
         if not keep:
             shutil.rmtree(self.work_dir, ignore_errors=True)
 
@@ -147,9 +149,35 @@ def downsample(image: dict, n: int) -> dict:
     return out
 
 
+# The ground truths last measured against, each with its half of the colour metrics
+# (metrics.PreparedColour): the sweep compares each view's ground truth with every setting's
+# render, and the views come round in turn. Each entry holds its image, so an id is not reused
+# while it is kept.
+_PREPARED: "OrderedDict[int, metrics.PreparedColour]" = OrderedDict()
+_PREPARED_KEPT = 4
+
+
+def _prepared_colour(reference: dict, ppd: float) -> metrics.PreparedColour:
+    prepared = _PREPARED.get(id(reference))
+    if prepared is not None and prepared.serves(reference, ppd):
+        _PREPARED.move_to_end(id(reference))
+        return prepared
+    prepared = metrics.PreparedColour(reference, ppd)
+    _PREPARED[id(reference)] = prepared
+    while len(_PREPARED) > _PREPARED_KEPT:
+        _PREPARED.popitem(last=False)
+    return prepared
+
+
+def forget_prepared_references() -> None:
+    """Drops the kept ground truths' colour halves (the run is over)."""
+    _PREPARED.clear()
+
+
 def measure(reference: dict, test: dict, ppd: float = 67.0) -> Tuple[Dict[str, object], np.ndarray]:
     """The metrics of lfprobe.core.metrics (PSNR, SSIM, FLIP, depth, confusion) and the FLIP map."""
-    result, error_map = metrics.compare_images_with_map(reference, test, ppd=ppd)
+    result, error_map = metrics.compare_images_with_map(reference, test, ppd=ppd,
+                                                        prepared=_prepared_colour(reference, ppd))
     row = {key: result[key] for key in METRIC_KEYS}
     row["confusion"] = result["counts"]
     return row, error_map
