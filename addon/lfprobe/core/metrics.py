@@ -115,7 +115,6 @@ class _SsimSide:
             raise ValueError(f"SSIM needs images of at least {SSIM_WINDOW}×{SSIM_WINDOW} pixels, got "
                              f"{x.shape[1]}×{x.shape[0]}")
         g = _gaussian_window_1d()
-        self.shape = image.shape
         self.x = x
         self.mu = _valid_filter(x, g)
         self.var = _valid_filter(x * x, g) - self.mu * self.mu
@@ -291,21 +290,29 @@ def compare_images(ref: Dict[str, np.ndarray], test: Dict[str, np.ndarray],
     return compare_images_with_map(ref, test, ppd)[0]
 
 
-class PreparedColour:
-    """A reference image's half of psnr, ssim and flip at one ppd (its sRGB encoding, SSIM
-    window statistics and FLIP filters), made once for every image compared with it: the report
-    compares each ground truth with many renders. The figures are the same bits as without it."""
+class _ReferenceColour:
+    """A reference colour image's half of psnr, ssim and flip at one ppd: its sRGB encoding, its
+    SSIM window statistics (None under the window) and its half of FLIP."""
 
-    def __init__(self, ref: Dict[str, np.ndarray], ppd: float = _flip.DEFAULT_PPD):
-        self.image = ref
+    def __init__(self, ref_rgb: np.ndarray, ppd: float):
         self.ppd = float(ppd)
-        self.rgb = visible_colour(ref)
-        self.encoded = srgb_encode(self.rgb)
+        self.encoded = srgb_encode(ref_rgb)
         try:
             self.ssim: Optional[_SsimSide] = _SsimSide(self.encoded)
         except ValueError:
             self.ssim = None
         self.flip = _flip.PreparedReference(self.encoded, ppd)
+
+
+class PreparedColour(_ReferenceColour):
+    """A ground truth's half of the colour metrics, made once for every image compared with it
+    (compare_images_with_map's `prepared`): the report compares each ground truth with many
+    renders. The figures are the same bits as without it."""
+
+    def __init__(self, ref: Dict[str, np.ndarray], ppd: float = _flip.DEFAULT_PPD):
+        self.image = ref
+        self.rgb = visible_colour(ref)
+        super().__init__(self.rgb, ppd)
 
     def serves(self, ref: Dict[str, np.ndarray], ppd: float) -> bool:
         """Whether this was prepared from `ref` itself (the same object) at `ppd`."""
@@ -315,22 +322,15 @@ class PreparedColour:
 def _colour_figures(ref_rgb: np.ndarray, test_rgb: np.ndarray, ppd: float,
                     prepared: Optional[PreparedColour] = None) -> Tuple[Dict[str, object], np.ndarray]:
     """({psnr, ssim, flip}, FLIP error map) of two colour images; ssim None under its window.
-    Each image is sRGB-encoded once for the three (what psnr, ssim and flip each do); with
-    `prepared` (made from the reference at this ppd), the reference's half is not made again."""
+    Each image is sRGB-encoded once for the three (what psnr, ssim and flip each do); the
+    reference's half comes from `prepared` where given (made from it at this ppd)."""
+    reference = prepared if prepared is not None else _ReferenceColour(ref_rgb, ppd)
     test = srgb_encode(test_rgb)
-    if prepared is None:
-        prepared_ref = srgb_encode(ref_rgb)
-        try:
-            ssim_value: Optional[float] = _ssim_encoded(prepared_ref, test)
-        except ValueError:
-            ssim_value = None
-        flip_mean, error_map = _flip.flip(prepared_ref, test, ppd)
-        return {"psnr": _psnr_encoded(prepared_ref, test), "ssim": ssim_value, "flip": flip_mean}, error_map
-    _check_pair(prepared.encoded, test)
-    ssim_value = (None if prepared.ssim is None
-                  else float(_ssim_map_against(prepared.ssim, test).mean(axis=(0, 1)).mean()))
-    error_map = _flip.flip_error_map_against(prepared.flip, test)
-    return ({"psnr": _psnr_encoded(prepared.encoded, test), "ssim": ssim_value,
+    _check_pair(reference.encoded, test)
+    ssim_value = (None if reference.ssim is None
+                  else float(_ssim_map_against(reference.ssim, test).mean(axis=(0, 1)).mean()))
+    error_map = _flip.flip_error_map_against(reference.flip, test)
+    return ({"psnr": _psnr_encoded(reference.encoded, test), "ssim": ssim_value,
              "flip": float(error_map.mean())}, error_map)
 
 
