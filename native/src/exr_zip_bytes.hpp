@@ -1,7 +1,8 @@
-// The last step of reading an EXR ZIP block (OpenEXR's file layout): the inflated bytes are the
-// differences of consecutive bytes, each stored + 128, of the block's first half of bytes
-// interleaved with its second. A fifth of reading a probe when made byte by byte (a running sum
-// is a chain of dependent additions); here sixteen bytes at a time.
+// The byte steps of an EXR ZIP block (OpenEXR's file layout) around its deflate: the block's
+// even bytes, then its odd bytes, stored as differences of consecutive bytes, each + 128.
+// Reading sums them back and interleaves the halves (a fifth of reading a probe when made byte
+// by byte: a running sum is a chain of dependent additions); writing splits and differences.
+// Both sixteen bytes at a time here, with the byte-by-byte forms they must equal.
 #pragma once
 
 #include <cstddef>
@@ -113,6 +114,75 @@ inline void unpack_zip_bytes(std::uint8_t* bytes, std::size_t n, std::uint8_t* o
     }
 #else
     unpack_zip_bytes_serially(bytes, n, out);
+#endif
+}
+
+// The block's `n` bytes `raw` split into even and odd bytes and differenced, byte by byte, as the
+// format describes it: what pack_zip_bytes must give.
+inline void pack_zip_bytes_serially(const std::uint8_t* raw, std::size_t n, std::uint8_t* out) {
+    const std::size_t half = (n + 1) / 2;
+    for (std::size_t k = 0; k < n / 2; ++k) {
+        out[k] = raw[2 * k];
+        out[half + k] = raw[2 * k + 1];
+    }
+    if (n % 2 == 1) {
+        out[half - 1] = raw[n - 1];
+    }
+    std::uint8_t previous = n == 0 ? 0 : out[0];
+    for (std::size_t i = 1; i < n; ++i) {
+        const std::uint8_t value = out[i];
+        out[i] = static_cast<std::uint8_t>(value - previous + 128);
+        previous = value;
+    }
+}
+
+// Out: what a ZIP block deflates (the same bytes as pack_zip_bytes_serially).
+inline void pack_zip_bytes(const std::uint8_t* raw, std::size_t n, std::uint8_t* out) {
+#if defined(__SSE2__)
+    const std::size_t half = (n + 1) / 2;
+    const std::size_t pairs = n / 2;
+    constexpr std::size_t kLanes = 16;
+    if (pairs < kLanes) {
+        pack_zip_bytes_serially(raw, n, out);
+        return;
+    }
+    const __m128i low_bytes = _mm_set1_epi16(0x00ff);
+    const __m128i bias = _mm_set1_epi8(static_cast<char>(-128));
+    // The byte before each half's first, in lane 15: the first byte is stored as is (as if 128
+    // came before it), and the odd half follows the even half's last byte.
+    __m128i before_even = _mm_slli_si128(_mm_set1_epi8(static_cast<char>(-128)), 15);
+    __m128i before_odd = _mm_slli_si128(_mm_cvtsi32_si128(raw[2 * (half - 1)]), 15);
+    std::size_t k = 0;
+    for (; k + kLanes <= pairs; k += kLanes) {
+        const __m128i a = _mm_loadu_si128(reinterpret_cast<const __m128i*>(raw + 2 * k));
+        const __m128i b = _mm_loadu_si128(reinterpret_cast<const __m128i*>(raw + 2 * k + kLanes));
+        const __m128i even =
+            _mm_packus_epi16(_mm_and_si128(a, low_bytes), _mm_and_si128(b, low_bytes));
+        const __m128i odd = _mm_packus_epi16(_mm_srli_epi16(a, 8), _mm_srli_epi16(b, 8));
+        const __m128i previous_even =
+            _mm_or_si128(_mm_slli_si128(even, 1), _mm_srli_si128(before_even, 15));
+        const __m128i previous_odd =
+            _mm_or_si128(_mm_slli_si128(odd, 1), _mm_srli_si128(before_odd, 15));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + k),
+                         _mm_add_epi8(_mm_sub_epi8(even, previous_even), bias));
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out + half + k),
+                         _mm_add_epi8(_mm_sub_epi8(odd, previous_odd), bias));
+        before_even = even;
+        before_odd = odd;
+    }
+    auto last_even = static_cast<std::uint8_t>(_mm_cvtsi128_si32(_mm_srli_si128(before_even, 15)));
+    auto last_odd = static_cast<std::uint8_t>(_mm_cvtsi128_si32(_mm_srli_si128(before_odd, 15)));
+    for (; k < pairs; ++k) {
+        out[k] = static_cast<std::uint8_t>(raw[2 * k] - last_even + 128);
+        out[half + k] = static_cast<std::uint8_t>(raw[2 * k + 1] - last_odd + 128);
+        last_even = raw[2 * k];
+        last_odd = raw[2 * k + 1];
+    }
+    if (n % 2 == 1) {
+        out[half - 1] = static_cast<std::uint8_t>(raw[n - 1] - last_even + 128);
+    }
+#else
+    pack_zip_bytes_serially(raw, n, out);
 #endif
 }
 

@@ -396,20 +396,7 @@ constexpr int kZipLevel = 1;
 std::vector<std::uint8_t> zip_block(std::vector<std::uint8_t>& raw) {
     const std::size_t size = raw.size();
     std::vector<std::uint8_t> shuffled(size);
-    const std::size_t half = (size + 1) / 2;
-    for (std::size_t k = 0; k < size / 2; ++k) {
-        shuffled[k] = raw[2 * k];
-        shuffled[half + k] = raw[2 * k + 1];
-    }
-    if (size % 2 == 1) {
-        shuffled[half - 1] = raw[size - 1];
-    }
-    std::uint8_t previous = shuffled.empty() ? 0 : shuffled[0];
-    for (std::size_t i = 1; i < size; ++i) {
-        const std::uint8_t value = shuffled[i];
-        shuffled[i] = static_cast<std::uint8_t>(value - previous + 128);
-        previous = value;
-    }
+    pack_zip_bytes(raw.data(), size, shuffled.data());
     struct Free {
         void operator()(libdeflate_compressor* c) const { libdeflate_free_compressor(c); }
     };

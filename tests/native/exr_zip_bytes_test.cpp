@@ -1,6 +1,6 @@
-// An EXR ZIP block's differences summed and its halves interleaved sixteen bytes at a time
-// (exr_zip_bytes.hpp): the same bytes as byte by byte, for every length around the vector
-// width and its halves, odd and even, and for bytes of every value.
+// An EXR ZIP block's bytes split and differenced for writing, and summed and interleaved for
+// reading, sixteen bytes at a time (exr_zip_bytes.hpp): the same bytes as byte by byte, for
+// every length around the vector width and its halves, odd and even, and bytes of any value.
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -35,6 +35,15 @@ TEST(ExrZipBytes, SixteenAtATimeGiveTheBytesOfTheFormat) {
             std::vector<std::uint8_t> got(n, 0xab);
             unpack_zip_bytes(scratch.data(), n, got.data());
             ASSERT_EQ(got, expected) << n << " bytes, trial " << trial;
+            // Written: split and differenced as byte by byte, and read back to the same bytes.
+            std::vector<std::uint8_t> packed(n, 0xcd);
+            std::vector<std::uint8_t> packed_serially(n);
+            pack_zip_bytes(inflated.data(), n, packed.data());
+            pack_zip_bytes_serially(inflated.data(), n, packed_serially.data());
+            ASSERT_EQ(packed, packed_serially) << n << " bytes, trial " << trial;
+            std::vector<std::uint8_t> back(n);
+            unpack_zip_bytes(packed.data(), n, back.data());
+            ASSERT_EQ(back, inflated) << n << " bytes, trial " << trial;
         }
     }
 }
