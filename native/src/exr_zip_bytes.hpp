@@ -33,6 +33,14 @@ inline void unpack_zip_bytes_serially(std::uint8_t* bytes, std::size_t n, std::u
 #if defined(__SSE2__)
 namespace zip_bytes_detail {
 
+constexpr std::size_t kLanes = 16;
+
+// Whether a block of n bytes has a run of kLanes pairs to take at a time: the even (first) half
+// holds (n + 1) / 2 bytes, the odd half n / 2.
+constexpr bool has_lanes_of_pairs(std::size_t n) {
+    return n / 2 >= kLanes;
+}
+
 // The running sums (mod 256) of sixteen differences, from `carry` (every lane the sum before).
 inline __m128i running_sums(__m128i differences, __m128i carry) {
     __m128i x = differences;
@@ -58,13 +66,12 @@ inline __m128i last_byte_everywhere(__m128i x) {
 inline void unpack_zip_bytes(std::uint8_t* bytes, std::size_t n, std::uint8_t* out) {
 #if defined(__SSE2__)
     using namespace zip_bytes_detail;
-    const std::size_t second_start = (n + 1) / 2;
-    const std::size_t pairs = n / 2;
-    constexpr std::size_t kLanes = 16;
-    if (pairs < kLanes) {
+    if (!has_lanes_of_pairs(n)) {
         unpack_zip_bytes_serially(bytes, n, out);
         return;
     }
+    const std::size_t second_start = (n + 1) / 2;
+    const std::size_t pairs = n / 2;
     // The sum of the first half's bytes (mod 256) gives the value the second half starts from:
     // its first byte's sum continues the first half's last, as if the two ran one after the
     // other. The first byte is stored as is: its difference is counted from 128.
@@ -139,13 +146,13 @@ inline void pack_zip_bytes_serially(const std::uint8_t* raw, std::size_t n, std:
 // Out: what a ZIP block deflates (the same bytes as pack_zip_bytes_serially).
 inline void pack_zip_bytes(const std::uint8_t* raw, std::size_t n, std::uint8_t* out) {
 #if defined(__SSE2__)
-    const std::size_t half = (n + 1) / 2;
-    const std::size_t pairs = n / 2;
-    constexpr std::size_t kLanes = 16;
-    if (pairs < kLanes) {
+    using namespace zip_bytes_detail;
+    if (!has_lanes_of_pairs(n)) {
         pack_zip_bytes_serially(raw, n, out);
         return;
     }
+    const std::size_t half = (n + 1) / 2;
+    const std::size_t pairs = n / 2;
     const __m128i low_bytes = _mm_set1_epi16(0x00ff);
     const __m128i bias = _mm_set1_epi8(static_cast<char>(-128));
     // The byte before each half's first, in lane 15: the first byte is stored as is (as if 128
