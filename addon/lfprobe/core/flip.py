@@ -247,10 +247,7 @@ def flip_error_map(ref_srgb: np.ndarray, test_srgb: np.ndarray, ppd: float = DEF
     ref = np.asarray(ref_srgb, dtype=np.float64)
     test = np.asarray(test_srgb, dtype=np.float64)
     _check_flip_input(ref, test, ppd)
-    ref_ycxcz, test_ycxcz = _ycxcz_of(ref), _ycxcz_of(test)
-    delta_c = color_difference(ref_ycxcz, test_ycxcz, ppd)
-    delta_f = feature_difference(ref_ycxcz, test_ycxcz, ppd)
-    return np.power(delta_c, 1.0 - delta_f)
+    return flip_error_map_against(PreparedReference(ref, ppd), test)
 
 
 def flip_error_map_against(reference: PreparedReference, test_srgb: np.ndarray) -> np.ndarray:
