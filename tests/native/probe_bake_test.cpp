@@ -951,3 +951,84 @@ TEST(LocalGeometry, PointsAtASurfacesEdgeKnowWhereItsInsideIs) {
         }
     }
 }
+
+TEST(ProbeBake, ASliverOnlyAFringeReachesIsTheFillsFirst) {
+    // The 40 cm plate of 2 cm pitch 0.6 m from the probe, before a wall 3 m away that no scan
+    // saw just beside the plate's silhouette (a scanner's shadow, as the probe sees it: the
+    // rays that pass the plate's plane 0.2-0.23 m off its centre line meet the wall where it
+    // has no points). Only the plate's splats reach those texels: fringes and discs past its
+    // edge, which used to win them and grow the plate by up to a texel there. With the fill
+    // on they are its first: it continues the wall behind (a disocclusion). With the plate
+    // alone, the same claims stand where nothing can be filled: the plate loses no texel.
+    PointCloud plate_only;
+    add_wall_x(plate_only, 0.6f, 0.02f, 0.02f, 0.2f);
+    PointCloud cloud = plate_only;
+    for (float y = -1.5f; y <= 1.5f; y += 0.01f) {
+        for (float z = -1.5f; z <= 1.5f; z += 0.01f) {
+            // Where the ray to (3, y, z) passes x = 0.6: the shadow lies beside the plate's
+            // sides, as a scanner beside the probe would leave it.
+            const float plate_y = std::abs(y) * 0.2f;
+            if (plate_y > 0.2f && plate_y < 0.23f && std::abs(z) * 0.2f <= 0.2f) {
+                continue;
+            }
+            cloud.positions.emplace_back(3.0f, y, z);
+            cloud.colors.emplace_back(0.5f);
+            cloud.scan_index.push_back(0);
+        }
+    }
+    for (PointCloud* c : {&plate_only, &cloud}) {
+        c->scans.push_back(
+            ScanSource{"plate and wall", c->positions.size(), glm::dvec3(0.0), true});
+    }
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    const LocalGeometry plate_geometry = estimate_local_geometry(plate_only, {});
+    BakeSettings settings;
+    settings.resolution = 1024;
+    BakeSettings unfilled = settings;
+    unfilled.hole_fill_texels = 0; // the fringes' claims stand, as before
+    const ProbeMap filled = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+    const ProbeMap kept = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), unfilled);
+    // Past the plate's end as its edge points place it (half their 2.6 cm spacing past them,
+    // 0.213 m) and within their splats' reach (0.221 m).
+    auto plate_beside_edge = [](const ProbeMap& map) {
+        std::size_t band = 0;
+        std::size_t plate = 0;
+        std::size_t wall = 0;
+        for_each_texel_on_wall_x(
+            map, glm::vec3(0.0f), 0.6f,
+            [](const glm::vec3& p) {
+                return p.y >= 0.214f && p.y <= 0.22f && std::abs(p.z) <= 0.15f;
+            },
+            [&](std::size_t i, const glm::vec3&) {
+                ++band;
+                plate += map.distance[i] < 1.0f ? 1 : 0;
+                wall += std::isfinite(map.distance[i]) && map.distance[i] > 2.9f ? 1 : 0;
+            });
+        EXPECT_GT(band, 100u);
+        return std::pair{static_cast<double>(plate) / static_cast<double>(band),
+                         static_cast<double>(wall) / static_cast<double>(band)};
+    };
+    const auto [plate_filled, wall_filled] = plate_beside_edge(filled);
+    const auto [plate_kept, wall_kept] = plate_beside_edge(kept);
+    std::printf(
+        "past the plate's edge, over the wall's shadow: plate %.3f, wall %.3f with the fill "
+        "first; plate %.3f, wall %.3f with the fringes' claims\n",
+        plate_filled, wall_filled, plate_kept, wall_kept);
+    EXPECT_GT(plate_kept, 0.5); // the claims grew the plate
+    EXPECT_LT(plate_filled, 0.02);
+    EXPECT_GT(wall_filled, 0.98);
+    // The plate alone: every texel its splats won without the fill, it still holds.
+    const ProbeMap alone =
+        bake_probe_from_cloud(plate_only, plate_geometry, glm::dvec3(0.0), settings);
+    const ProbeMap alone_kept =
+        bake_probe_from_cloud(plate_only, plate_geometry, glm::dvec3(0.0), unfilled);
+    std::size_t held = 0;
+    for (std::size_t i = 0; i < alone.texel_count(); ++i) {
+        if (alone_kept.state(i) == TexelState::Surface) {
+            ++held;
+            ASSERT_EQ(alone.state(i), TexelState::Surface) << "texel " << i << " lost";
+            ASSERT_EQ(alone.distance[i], alone_kept.distance[i]);
+        }
+    }
+    EXPECT_GT(held, 1000u);
+}
