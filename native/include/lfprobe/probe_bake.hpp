@@ -30,12 +30,13 @@ struct BakeSettings {
     float splat_plane_reach = 2.0f;
     // A splat's core: the disc within this many point spacings of the point. A texel any
     // splat's core reaches takes the nearest of those; the rest of a disc (its fringe) fills
-    // only texels no core reaches. Without it the nearest splat won wherever its fringe
-    // reached, and a near object's silhouette, a crease or a surface seen obliquely grew by the
-    // fringe's width over what lies behind. A square sampling pattern needs 0.71 of its pitch
-    // to be covered, 0.62 of the mean distance to six neighbours; 0.7 leaves a margin for scan
-    // lines that oblique incidence draws apart (at 0.625 the hard scene's probe 1.5 cm from
-    // the pillar saw what lies 0.6 m behind the pillar's face in 125 of the 2,496 texels
+    // only texels no core reaches (with the hole fill on, only those it leaves unknown: the
+    // fill continues the surface behind a silhouette first). Without it the nearest splat won
+    // wherever its fringe reached, and a near object's silhouette, a crease or a surface seen
+    // obliquely grew by the fringe's width over what lies behind. A square sampling pattern needs
+    // 0.71 of its pitch to be covered, 0.62 of the mean distance to six neighbours; 0.7 leaves a
+    // margin for scan lines that oblique incidence draws apart (at 0.625 the hard scene's probe 1.5
+    // cm from the pillar saw what lies 0.6 m behind the pillar's face in 125 of the 2,496 texels
     // looking at it, at 0.7 in 15, with whole discs in none). Lab room, 16 samples a pixel, four
     // views: +0.05 to +0.31 dB from 0.1° scans, +0.02 to +0.37 from 0.25°, +0.24 to +0.45 from
     // 1°, no more holes. At splat_scale or more: the whole disc is core, as before.

@@ -322,7 +322,8 @@ def build_parser() -> argparse.ArgumentParser:
     bake.add_argument("--splat-core", type=finite_float, default=defaults.bake("splat_core_scale"),
                       metavar="S", help="scans: a splat's core, in point spacings: a texel takes the nearest "
                                         "splat whose core reaches it, and the rest of a splat only fills texels "
-                                        "no core reaches (default %(default)s; the --splat-scale or more: the whole "
+                                        "no core reaches and the hole fill leaves unknown (default %(default)s; "
+                                        "the --splat-scale or more: the whole "
                                         "splat is core, as bakes before this option)")
     bake.add_argument("--lod-texels", type=finite_float, default=defaults.bake("lod_texels"), metavar="T",
                       help="scans: where the point hierarchy's cell surfels are at most T texels apart "
