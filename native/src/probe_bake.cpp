@@ -650,7 +650,7 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
             // wider one, was too wide for the fill: a second fill fills it, as before the
             // sliver went to the fill (the demo's 2048² grid: 22,171 texels; the real pump
             // room's 512² grid: 0.21 % of its texels, 16 of its view's 13,501 HIT pixels lost
-            // instead of 139).
+            // instead of 139; ProbeBake.AHoleARestoredSliverClosesOffIsFilledByASecondFill).
             fill_small_holes(map, hole_fill_width(settings));
         }
     }

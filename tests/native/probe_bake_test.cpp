@@ -103,9 +103,6 @@ void add_wall_x(PointCloud& cloud, float x, float pitch_y, float pitch_z, float 
     }
 }
 
-// The fraction of `map`'s texels, baked at `probe`, whose ray meets the plane x = probe.x +
-// `wall_distance` within `half_extent` of the x axis in y and z, for which `counts(distance)`
-// holds (the texel's stored distance).
 // Calls visit(texel index, point) for every texel of `map`, baked at `probe`, whose ray meets
 // the plane x = probe.x + `wall_distance` at a point for which `on_it(point)` holds.
 template <class OnIt, class Visit>
@@ -1031,4 +1028,63 @@ TEST(ProbeBake, ASliverOnlyAFringeReachesIsTheFillsFirst) {
         }
     }
     EXPECT_GT(held, 1000u);
+}
+
+TEST(ProbeBake, AHoleARestoredSliverClosesOffIsFilledByASecondFill) {
+    // The plate and wall of ASliverOnlyAFringeReachesIsTheFillsFirst, the wall's shadow beside
+    // the plate's +y edge only as wide as the plate's fringes reach (0.2-0.219 m where the rays
+    // pass the plate's plane), along its whole height. Beside that sliver the wall has two more
+    // unseen patches: a narrow one (out to 0.24 m, 0.08-0.12 m below the centre line), which
+    // the fill fills, and a wide one (out to 0.4 m, above 0.04 m), which it must not. With the
+    // sliver unknown, the first fill finds the two joined through it into one hole too wide to
+    // fill; once the sliver's claims are restored, the narrow patch is a hole of its own, closed
+    // off by them, and the second fill fills it.
+    PointCloud cloud;
+    add_wall_x(cloud, 0.6f, 0.02f, 0.02f, 0.2f);
+    for (float y = -1.5f; y <= 2.5f; y += 0.01f) {
+        for (float z = -1.5f; z <= 1.5f; z += 0.01f) {
+            const float plate_y = y * 0.2f; // where the ray to (3, y, z) passes x = 0.6
+            const float plate_z = z * 0.2f;
+            const bool shadow = plate_y > 0.2f && plate_y < 0.219f && std::abs(plate_z) <= 0.2f;
+            const bool narrow =
+                plate_y > 0.2f && plate_y < 0.24f && plate_z >= -0.12f && plate_z <= -0.08f;
+            const bool wide =
+                plate_y > 0.2f && plate_y < 0.4f && plate_z >= 0.04f && plate_z <= 0.2f;
+            if (shadow || narrow || wide) {
+                continue;
+            }
+            cloud.positions.emplace_back(3.0f, y, z);
+            cloud.colors.emplace_back(0.5f);
+            cloud.scan_index.push_back(0);
+        }
+    }
+    cloud.scans.push_back(
+        ScanSource{"plate and wall", cloud.positions.size(), glm::dvec3(0.0), true});
+    const LocalGeometry geometry = estimate_local_geometry(cloud, {});
+    BakeSettings settings;
+    settings.resolution = 1024;
+    const ProbeMap map = bake_probe_from_cloud(cloud, geometry, glm::dvec3(0.0), settings);
+    // The texels over each patch, clear of its edges by about a texel (2 mm at the plate).
+    auto over = [&](float y0, float y1, float z0, float z1) {
+        std::size_t texels = 0;
+        std::size_t wall = 0;
+        std::size_t unknown = 0;
+        for_each_texel_on_wall_x(
+            map, glm::vec3(0.0f), 0.6f,
+            [&](const glm::vec3& p) { return p.y >= y0 && p.y <= y1 && p.z >= z0 && p.z <= z1; },
+            [&](std::size_t i, const glm::vec3&) {
+                ++texels;
+                wall += std::isfinite(map.distance[i]) && map.distance[i] > 2.9f ? 1 : 0;
+                unknown += map.state(i) == TexelState::Unknown ? 1 : 0;
+            });
+        EXPECT_GT(texels, 50u);
+        return std::pair{static_cast<double>(wall) / static_cast<double>(texels),
+                         static_cast<double>(unknown) / static_cast<double>(texels)};
+    };
+    const auto [narrow_wall, narrow_unknown] = over(0.224f, 0.236f, -0.116f, -0.084f);
+    const auto [wide_wall, wide_unknown] = over(0.26f, 0.38f, 0.06f, 0.18f);
+    std::printf("narrow patch: wall %.3f, unknown %.3f; wide patch: wall %.3f, unknown %.3f\n",
+                narrow_wall, narrow_unknown, wide_wall, wide_unknown);
+    EXPECT_GT(narrow_wall, 0.98);  // filled: the wall continued behind the plate's edge
+    EXPECT_GT(wide_unknown, 0.98); // too wide: left as what no scan saw
 }
