@@ -80,12 +80,13 @@ TexelFootprint texel_footprint(const EmbreeScene& scene, const glm::dvec3& posit
         position + centre.t * glm::dvec3(oct::texel_direction(texel, n));
     glm::vec3 sum{0.0f};
     int counted = 0;
-    // The strata in rows, traced in Embree's packets: they leave one point a texel wide. A
-    // 16-ray packet costs about what 8-10 single rays do, however few of its rays are live, so
-    // fewer than kPacketFrom rays go one by one (a 2048² probe of the lab room on 2 threads:
-    // 2×2 strata 4.9 s in packets, 2.4 s singly; 3×3 5.2 and 4.6 s; 4×4 6.1 and 7.7 s).
+    // The strata in rows, traced in Embree's packets as coherent rays (they leave one point a
+    // texel wide), except a few: a packet costs about what 5-6 single rays do, however few of
+    // its rays are live. A 2048² probe of the lab room on 2 threads, packets against single
+    // rays: 2×2 strata 2.7-2.9 s against 2.5 s; 3×3 3.5 against 4.6 s; 4×4 4.2-4.9 against
+    // 7.7 s (and 6.0-6.5 s in packets not flagged coherent).
     constexpr std::size_t kPacket = EmbreeScene::kPacket;
-    constexpr std::size_t kPacketFrom = 12;
+    constexpr std::size_t kPacketFrom = 6;
     std::array<Ray, kPacket> rays;
     std::array<MeshHit, kPacket> hits;
     const int strata = ss * ss;
