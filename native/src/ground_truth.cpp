@@ -1,6 +1,7 @@
 #include "lfprobe/ground_truth.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cmath>
 #include <limits>
@@ -65,6 +66,9 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
     const double seconds = for_each_image_tile(
         camera.width, camera.height, settings.tile_size, progress, [&](const ImageTile& r) {
             std::uint64_t tile_rays = 0;
+            constexpr int kPacket = static_cast<int>(EmbreeScene::kPacket);
+            std::array<Ray, EmbreeScene::kPacket> strata_rays;
+            std::array<MeshHit, EmbreeScene::kPacket> strata_hits;
             for (int y = r.rows().begin(); y < r.rows().end(); ++y) {
                 for (int x = r.cols().begin(); x < r.cols().end(); ++x) {
                     const std::size_t i = image.index(x, y);
@@ -82,13 +86,24 @@ RenderedImage render_ground_truth(const EmbreeScene& scene, const Camera& camera
                         }
                     } else {
                         // Summed in a fixed order: the same floats for any thread count.
-                        for (int sy = 0; sy < n; ++sy) {
-                            for (int sx = 0; sx < n; ++sx) {
-                                const double ox = stratum_centre(sx, n);
-                                const double oy = stratum_centre(sy, n);
-                                const MeshHit h = scene.intersect(
-                                    camera_rays.local_pixel_ray(x, y, offset, ox, oy), spread);
-                                ++tile_rays;
+                        // The strata row by row, up to a packet at a time: they lie within
+                        // the pixel (EmbreeScene::intersect_coherent).
+                        const int strata = n * n;
+                        for (int first = 0; first < strata; first += kPacket) {
+                            const int count = std::min(kPacket, strata - first);
+                            for (int k = 0; k < count; ++k) {
+                                const int s = first + k;
+                                strata_rays[static_cast<std::size_t>(k)] =
+                                    camera_rays.local_pixel_ray(x, y, offset,
+                                                                stratum_centre(s % n, n),
+                                                                stratum_centre(s / n, n));
+                            }
+                            scene.intersect_coherent(strata_rays.data(),
+                                                     static_cast<std::size_t>(count), spread,
+                                                     strata_hits.data());
+                            tile_rays += static_cast<std::uint64_t>(count);
+                            for (int k = 0; k < count; ++k) {
+                                const MeshHit& h = strata_hits[static_cast<std::size_t>(k)];
                                 if (h.hit) {
                                     colour += h.base_color;
                                     coverage += 1.0f;

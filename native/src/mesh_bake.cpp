@@ -80,13 +80,9 @@ TexelFootprint texel_footprint(const EmbreeScene& scene, const glm::dvec3& posit
         position + centre.t * glm::dvec3(oct::texel_direction(texel, n));
     glm::vec3 sum{0.0f};
     int counted = 0;
-    // The strata in rows, traced in Embree's packets as coherent rays (they leave one point a
-    // texel wide), except a few: a packet costs about what 5-6 single rays do, however few of
-    // its rays are live. A 2048² probe of the lab room on 2 threads, packets against single
-    // rays: 2×2 strata 2.7-2.9 s against 2.5 s; 3×3 3.5 against 4.6 s; 4×4 4.2-4.9 against
-    // 7.7 s (and 6.0-6.5 s in packets not flagged coherent).
+    // The strata in rows, traced together (EmbreeScene::intersect_coherent): they leave one
+    // point a texel wide.
     constexpr std::size_t kPacket = EmbreeScene::kPacket;
-    constexpr std::size_t kPacketFrom = 6;
     std::array<Ray, kPacket> rays;
     std::array<MeshHit, kPacket> hits;
     const int strata = ss * ss;
@@ -97,13 +93,7 @@ TexelFootprint texel_footprint(const EmbreeScene& scene, const glm::dvec3& posit
             const int s = first + static_cast<int>(k);
             rays[k] = stratum_ray(position, texel, n, ss, s % ss, s / ss);
         }
-        if (count < kPacketFrom) {
-            for (std::size_t k = 0; k < count; ++k) {
-                hits[k] = scene.intersect(rays[k], spread);
-            }
-        } else {
-            scene.intersect_packet(rays.data(), count, spread, hits.data());
-        }
+        scene.intersect_coherent(rays.data(), count, spread, hits.data());
         for (std::size_t k = 0; k < count; ++k) {
             const MeshHit& h = hits[k];
             if (!h.hit) {

@@ -59,6 +59,22 @@ public:
     // sets only `hit` (false), the other fields keep what they held. Thread-safe.
     static constexpr std::size_t kPacket = 16;
     void intersect_packet(const Ray* rays, std::size_t count, double spread, MeshHit* hits) const;
+    // The same for rays that lie close together (a texel's or a pixel's strata), count at most
+    // kPacket: in a packet from kCoherentPacketFrom rays, else one by one, whichever is faster
+    // (a packet costs about what 5-6 single rays do, however few of its rays are live; a
+    // 2048² mesh bake of the lab room on 2 threads, packets against single rays: 2×2 strata a
+    // texel 2.7-2.9 s against 2.5 s, 3×3 3.5 against 4.6 s, 4×4 4.2-4.9 against 7.7 s).
+    static constexpr std::size_t kCoherentPacketFrom = 6;
+    void intersect_coherent(const Ray* rays, std::size_t count, double spread,
+                            MeshHit* hits) const {
+        if (count >= kCoherentPacketFrom) {
+            intersect_packet(rays, count, spread, hits);
+            return;
+        }
+        for (std::size_t k = 0; k < count; ++k) {
+            hits[k] = intersect(rays[k], spread);
+        }
+    }
     // Only whether and where: t (Embree's float) and the triangle; for throughput figures.
     [[nodiscard]] bool intersect_fast(const Ray& ray, float& t, std::uint32_t& triangle) const;
 
