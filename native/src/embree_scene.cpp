@@ -191,13 +191,16 @@ void load_packet(Packet& packet, std::array<int, Width>& valid, const Ray* rays,
 }
 
 // rtcIntersect4/8/16 over rays[0, count) in packets of `Packet`'s width, unused lanes of the
-// last packet masked off.
+// last packet masked off. Flagged coherent, as a renderer flags camera rays: Embree then
+// traverses each packet together (the demo's four views at 640×400 on 2 threads: 12.5-21.2 M
+// rays/s unflagged, 30.7-50.9 M flagged, against 11.5-16.0 M single rays).
 template <class Packet, int Width, class Intersect>
 std::uint64_t count_packet_hits(RTCScene scene, const Ray* rays, std::size_t count,
                                 Intersect&& intersect) {
     std::uint64_t hits = 0;
     RTCIntersectContext context;
     rtcInitIntersectContext(&context);
+    context.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
     alignas(64) Packet packet;
     alignas(64) std::array<int, Width> valid;
     for (std::size_t first = 0; first < count; first += Width) {

@@ -128,7 +128,7 @@ def _trace_row(_native, field, mesh, name: str, text: str) -> dict:
         f"{row['embree_rays_per_second_2_threads'] / 1e6:.2f} M rays/s on 2 threads: "
         f"probe trace / Embree = {row['trace_over_embree']:.3f} (whole frame incl. "
         f"ray generation and pixel writes / Embree = {row['frame_over_embree']:.3f})\n"
-        f"    Embree in packets of {best_packet} (rtcIntersect{best_packet}, its fastest "
+        f"    Embree in coherent packets of {best_packet} (rtcIntersect{best_packet}, its fastest "
         f"of 4, 8, 16): {embree['packet'] / 1e6:.2f} M rays/s: probe trace / "
         f"Embree packets = {row['trace_over_embree_packets']:.3f}\n"
         f"    the same rays started at their own answers (nothing left to skip): "

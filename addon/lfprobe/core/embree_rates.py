@@ -8,7 +8,7 @@ PACKET_WIDTHS = (4, 8, 16)
 
 def embree_rates(_native, mesh, camera_text: str, threads: int, repeats: int) -> dict:
     """Rays per second of rtcIntersect1 ("single") and of the fastest of rtcIntersect4/8/16
-    ("packet", its width "packet_width"): the fairer match for a tracer that takes camera rays
+    flagged coherent ("packet", its width "packet_width"): the fairer match for a tracer that takes camera rays
     in runs. Trace only, rays made beforehand, fastest of `repeats`."""
     single = _native.embree_throughput(mesh, camera_text, threads=threads, repeats=repeats)
     packets = {width: _native.embree_throughput(mesh, camera_text, threads=threads, repeats=repeats,

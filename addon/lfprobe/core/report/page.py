@@ -105,7 +105,7 @@ def _speed_section(page, data: Dict[str, object], img, findings) -> None:
     page.paragraph("Highlighted rows: Pareto front of ms/frame against PSNR. Per-view rows: sweep_views.csv.", "note")
     page.paragraph(f"Probe trace of the reference setting ({data['reference_setting']}) against Embree on the "
                    "scene's mesh: the same camera rays, made beforehand and timed as trace only, fastest of the "
-                   "preset's repeats; Embree with single rays (rtcIntersect1) and in packets (its fastest of 4, 8 "
+                   "preset's repeats; Embree with single rays (rtcIntersect1) and in packets flagged coherent (its fastest of 4, 8 "
                    "and 16 rays a call). The aims: more than Embree with the eye at a probe, a third of it "
                    "elsewhere. 'From answer': the same rays started where their own traces ended (the HIT, or "
                    "as far as an UNKNOWN proved them free), so that nothing is left to skip; what they cost is "
