@@ -1,6 +1,7 @@
 #include "lfprobe/scanner_sim.hpp"
 
 #include <algorithm>
+#include <array>
 #include <charconv>
 #include <chrono>
 #include <cmath>
@@ -123,25 +124,39 @@ std::vector<SimulatedPoint> simulate_scan(const EmbreeScene& scene, const Scanne
             const double elevation = zenith ? std::numbers::pi / 2.0 : p.elevation_min + j * p.step;
             const int count = zenith ? 1 : p.azimuths;
             auto& out = per_row[static_cast<std::size_t>(j)];
-            for (int k = 0; k < count; ++k) {
-                const double azimuth = p.azimuth_start + k * p.step;
-                Ray ray;
-                ray.origin = local_origin;
-                ray.direction = zenith ? glm::dvec3(0.0, 0.0, 1.0)
-                                       : glm::dvec3(std::cos(elevation) * std::cos(azimuth),
-                                                    std::cos(elevation) * std::sin(azimuth),
-                                                    std::sin(elevation));
-                ray.t_max = settings.max_range;
-                const MeshHit h = scene.intersect(ray, spread);
-                if (!h.hit) {
-                    continue;
+            // A row's rays a packet at a time: neighbours a step apart, traced together
+            // (EmbreeScene::intersect_coherent).
+            constexpr int kPacket = static_cast<int>(EmbreeScene::kPacket);
+            std::array<Ray, EmbreeScene::kPacket> rays;
+            std::array<MeshHit, EmbreeScene::kPacket> hits;
+            for (int first = 0; first < count; first += kPacket) {
+                const int live = std::min(kPacket, count - first);
+                for (int q = 0; q < live; ++q) {
+                    const double azimuth = p.azimuth_start + (first + q) * p.step;
+                    Ray& ray = rays[static_cast<std::size_t>(q)];
+                    ray.origin = local_origin;
+                    ray.direction = zenith ? glm::dvec3(0.0, 0.0, 1.0)
+                                           : glm::dvec3(std::cos(elevation) * std::cos(azimuth),
+                                                        std::cos(elevation) * std::sin(azimuth),
+                                                        std::sin(elevation));
+                    ray.t_max = settings.max_range;
                 }
-                const std::uint64_t index =
-                    static_cast<std::uint64_t>(j) * static_cast<std::uint64_t>(p.azimuths) +
-                    static_cast<std::uint64_t>(k);
-                const double range = h.t + sigma_per_metre * h.t * gaussian(settings.seed, index);
-                out.push_back(
-                    SimulatedPoint{settings.position + range * ray.direction, h.base_color});
+                scene.intersect_coherent(rays.data(), static_cast<std::size_t>(live), spread,
+                                         hits.data());
+                for (int q = 0; q < live; ++q) {
+                    const MeshHit& h = hits[static_cast<std::size_t>(q)];
+                    if (!h.hit) {
+                        continue;
+                    }
+                    const std::uint64_t index =
+                        static_cast<std::uint64_t>(j) * static_cast<std::uint64_t>(p.azimuths) +
+                        static_cast<std::uint64_t>(first + q);
+                    const double range =
+                        h.t + sigma_per_metre * h.t * gaussian(settings.seed, index);
+                    out.push_back(SimulatedPoint{
+                        settings.position + range * rays[static_cast<std::size_t>(q)].direction,
+                        h.base_color});
+                }
             }
             if (progress != nullptr) {
                 progress->advance(1);
