@@ -52,11 +52,11 @@ public:
     // area, its stretch capped at 16 as anisotropic filtering caps it). 0: intersect(ray).
     [[nodiscard]] MeshHit intersect(const Ray& ray, double spread) const;
     // intersect(rays[k], spread) for k in [0, count), count at most kPacket, traced together
-    // in one of Embree's 16-ray packets (rtcIntersect16), flagged coherent: for rays that are,
-    // such as the strata of a mesh bake's texel, 16 rays cost about what 5-6 single ones do.
-    // A ray through a triangle's edge may take the other triangle than intersect takes. Every
-    // hit's attributes are computed as intersect computes them from Embree's answer; a miss
-    // sets only `hit` (false), the other fields keep what they held. Thread-safe.
+    // in one of Embree's 16-ray packets (rtcIntersect16), flagged coherent (for rays that are:
+    // intersect_coherent). A ray through a triangle's edge may take the other triangle than
+    // intersect takes, or miss where intersect hits. Every hit's attributes are computed as
+    // intersect computes them from Embree's answer; a miss sets only `hit` (false), the other
+    // fields keep what they held. Thread-safe.
     static constexpr std::size_t kPacket = 16;
     void intersect_packet(const Ray* rays, std::size_t count, double spread, MeshHit* hits) const;
     // The same for rays that lie close together (a texel's or a pixel's strata), count at most

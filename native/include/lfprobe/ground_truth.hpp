@@ -66,8 +66,8 @@ GroundTruthStats ground_truth_to_exr(const EmbreeScene& scene, const std::string
 // pixel-centre rays are generated first, then only rtcIntersect1 over all of them is timed,
 // `repeats` times; the figures are of the fastest repeat (the least disturbed on a shared
 // machine). Runs on the threads of the calling TBB arena.
-// `packet`: rays per Embree call, 1 (rtcIntersect1) or 4, 8, 16 (its packet API for coherent
-// rays, the fairer match for a tracer that works on runs of camera rays).
+// `packet`: rays per Embree call, 1 (rtcIntersect1) or 4, 8, 16 (its packet API, flagged
+// coherent: the fairer match for a tracer that works on runs of camera rays).
 [[nodiscard]] ThroughputResult embree_throughput(const EmbreeScene& scene, const Camera& camera,
                                                  int repeats = 3, int packet = 1);
 
