@@ -124,6 +124,17 @@ TEST(GroundTruth, OneAndTwoThreadsBitIdentical) {
     EXPECT_EQ(one.depth, two.depth);
     EXPECT_EQ(one.normal, two.normal);
     EXPECT_EQ(one.object, two.object);
+    // 4×4 and 8×8 strata, traced in coherent packets (2×2 go one by one): the same.
+    for (const int spp : {16, 64}) {
+        GroundTruthSettings packed = settings;
+        packed.samples_per_pixel = spp;
+        const RenderedImage a =
+            tbb::task_arena(1).execute([&] { return render_ground_truth(scene, cam, packed); });
+        const RenderedImage b =
+            tbb::task_arena(2).execute([&] { return render_ground_truth(scene, cam, packed); });
+        EXPECT_EQ(a.rgba, b.rgba) << spp;
+        EXPECT_EQ(a.depth, b.depth) << spp;
+    }
     // Textured: some colour other than white, some coverage between 0 and 1 at silhouettes.
     bool partial = false;
     for (std::size_t i = 0; i < one.pixel_count(); ++i) {

@@ -44,18 +44,31 @@ double distance_to_room(const glm::dvec3& p) {
                      std::abs(p.z), std::abs(p.z - 2.5)});
 }
 
+// A full sweep from `position` at `step_deg`, ranges noisy by `noise_mm` at 10 m.
+ScannerSettings station(const glm::dvec3& position, double step_deg, double noise_mm) {
+    ScannerSettings s;
+    s.position = position;
+    s.step_deg = step_deg;
+    s.noise_mm = noise_mm;
+    return s;
+}
+
+// The points of scan `s` in a closed room, which returns every one of the pattern's `rays`.
+std::vector<SimulatedPoint> scan_of_closed_room(const EmbreeScene& scene, const ScannerSettings& s,
+                                                std::uint64_t rays) {
+    ScanStats stats;
+    std::vector<SimulatedPoint> points = simulate_scan(scene, s, nullptr, &stats);
+    EXPECT_EQ(stats.rays, rays);
+    EXPECT_EQ(points.size(), stats.rays);
+    return points;
+}
+
 TEST(Scanner, PatternCountNoiseAndRoundTrip) {
     const Mesh mesh = closed_room();
     const EmbreeScene scene(mesh);
-    ScannerSettings s;
-    s.position = {0.5, 0.5, 1.5};
-    s.step_deg = 2.0;
-    s.noise_mm = 2.0;
-    ScanStats stats;
-    const std::vector<SimulatedPoint> points = simulate_scan(scene, s, nullptr, &stats);
+    const ScannerSettings s = station({0.5, 0.5, 1.5}, 2.0, 2.0);
     // 180 azimuths × 75 rows (−60° .. 88°) + the zenith; a closed room returns every ray.
-    EXPECT_EQ(stats.rays, 180u * 75u + 1u);
-    EXPECT_EQ(points.size(), stats.rays);
+    const std::vector<SimulatedPoint> points = scan_of_closed_room(scene, s, 180u * 75u + 1u);
     double max_off = 0.0;
     for (const SimulatedPoint& p : points) {
         const double range = glm::length(p.position - s.position);
@@ -94,14 +107,7 @@ TEST(Scanner, EveryRayOfAFineSweepInTheClosedLabRoomHits) {
     // where single rays do not. The room is closed, so every ray must return a point.
     const Mesh mesh = read_obj(std::string(LFPROBE_SOURCE_DIR) + "/blend/lab_room/lab_room.obj");
     const EmbreeScene scene(mesh);
-    ScannerSettings s;
-    s.position = {1.2, 0.9, 1.5};
-    s.step_deg = 0.1;
-    s.noise_mm = 1.0;
-    ScanStats stats;
-    const std::vector<SimulatedPoint> points = simulate_scan(scene, s, nullptr, &stats);
-    EXPECT_EQ(stats.rays, 3600u * 1500u + 1u);
-    EXPECT_EQ(points.size(), stats.rays);
+    (void)scan_of_closed_room(scene, station({1.2, 0.9, 1.5}, 0.1, 1.0), 3600u * 1500u + 1u);
 }
 
 // The .xyz lines are formatted on all cores with to_chars: each must be what printf's
@@ -115,10 +121,7 @@ TEST(Scanner, WrittenLinesAreWhatPrintfWritesInRayOrder) {
     mesh.world_offset = {-452117.0, 5411630.0, 212.0};
     mesh.materials[0].base_color = {0.6f, 0.02f, 0.3f};
     const EmbreeScene scene(mesh);
-    ScannerSettings s;
-    s.position = mesh.world_offset + glm::dvec3(0.5, 0.5, 1.5);
-    s.step_deg = 3.0;
-    s.noise_mm = 2.0;
+    const ScannerSettings s = station(mesh.world_offset + glm::dvec3(0.5, 0.5, 1.5), 3.0, 2.0);
     const std::vector<SimulatedPoint> points = simulate_scan(scene, s);
     ASSERT_EQ(points.size(), 120u * 50u + 1u); // the closed room returns every ray
     const auto path =
@@ -152,16 +155,11 @@ TEST(Scanner, WrittenLinesAreWhatPrintfWritesInRayOrder) {
 TEST(Scanner, PartialSweepKeepsItsAzimuthWindow) {
     const Mesh mesh = closed_room();
     const EmbreeScene scene(mesh);
-    ScannerSettings s;
-    s.position = {0.5, 0.5, 1.5};
-    s.step_deg = 2.0;
-    s.noise_mm = 0.0;
+    ScannerSettings s = station({0.5, 0.5, 1.5}, 2.0, 0.0);
     s.horizontal_fov_deg = 90.0;
     s.horizontal_start_deg = 30.0;
-    ScanStats stats;
-    const std::vector<SimulatedPoint> points = simulate_scan(scene, s, nullptr, &stats);
-    EXPECT_EQ(stats.rays, 45u * 75u + 1u); // 45 azimuths × 75 rows + the zenith
-    EXPECT_EQ(points.size(), stats.rays);
+    // 45 azimuths × 75 rows + the zenith.
+    const std::vector<SimulatedPoint> points = scan_of_closed_room(scene, s, 45u * 75u + 1u);
     const double deg = std::numbers::pi / 180.0;
     std::size_t zenith = 0;
     for (const SimulatedPoint& p : points) {
