@@ -618,12 +618,11 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     // that a splat reached. Lab room, 0.1° scans, the demo's 2048² grid, four views, 16 samples
     // a pixel: PSNR at a probe -0.07 to +0.14 dB, 0.4 m from one +0.06 to +0.09, 0.77 m -0.06
     // to +0.35 (docs/DESIGN.md §4; ProbeBake.ASliverOnlyAFringeReachesIsTheFillsFirst).
-    const bool fill_first = hole_fill_width(settings) > 0;
-    auto only_fringes = [&](std::size_t t) {
-        return fill_first && (front[t] & (kFringe | kBeyondEdge)) != 0;
-    };
+    const int fill_width = hole_fill_width(settings);
+    const bool fills_holes = fill_width > 0;
+    auto only_fringes = [&](std::size_t t) { return (front[t] & (kFringe | kBeyondEdge)) != 0; };
     tbb::parallel_for(std::size_t{0}, texels, [&](std::size_t t) {
-        if (winner[t] != kNoPoint && !only_fringes(t)) {
+        if (winner[t] != kNoPoint && !(fills_holes && only_fringes(t))) {
             resolve(t);
         }
     });
@@ -632,12 +631,12 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
     }
     // The paper's bake (no hole filling) keeps what its points show; a gap is opened only
     // where the fill can close it.
-    if (hole_fill_width(settings) > 0) {
+    if (fills_holes) {
         (void)open_gaps_in_nearer_surfaces(
-            map, std::min(sieve_gap_reach(n), std::max(1, hole_fill_width(settings) / 2)));
+            map, std::min(sieve_gap_reach(n), std::max(1, fill_width / 2)));
     }
-    fill_small_holes(map, hole_fill_width(settings));
-    if (fill_first) {
+    fill_small_holes(map, fill_width);
+    if (fills_holes) {
         std::atomic<bool> restored{false};
         tbb::parallel_for(std::size_t{0}, texels, [&](std::size_t t) {
             if (winner[t] != kNoPoint && only_fringes(t) && map.state(t) == TexelState::Unknown) {
@@ -651,7 +650,7 @@ ProbeMap bake_from(const Source& source, const glm::dvec3& centre, const BakeSet
             // sliver went to the fill (the demo's 2048² grid: 22,171 texels; the real pump
             // room's 512² grid: 0.21 % of its texels, 16 of its view's 13,501 HIT pixels lost
             // instead of 139; ProbeBake.AHoleARestoredSliverClosesOffIsFilledByASecondFill).
-            fill_small_holes(map, hole_fill_width(settings));
+            fill_small_holes(map, fill_width);
         }
     }
     return map;

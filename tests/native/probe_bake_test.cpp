@@ -103,6 +103,23 @@ void add_wall_x(PointCloud& cloud, float x, float pitch_y, float pitch_z, float 
     }
 }
 
+// The sliver tests' wall at x = 3, a point every centimetre from y = -1.5 to `y_max` and z =
+// -1.5 to 1.5, but none where unseen(plate_y, plate_z) holds: (plate_y, plate_z) is where the
+// ray from the origin to the point passes x = 0.6, the plane of those tests' plate.
+template <class Unseen>
+void add_far_wall_but(PointCloud& cloud, float y_max, Unseen&& unseen) {
+    for (float y = -1.5f; y <= y_max; y += 0.01f) {
+        for (float z = -1.5f; z <= 1.5f; z += 0.01f) {
+            if (unseen(y * 0.2f, z * 0.2f)) {
+                continue;
+            }
+            cloud.positions.emplace_back(3.0f, y, z);
+            cloud.colors.emplace_back(0.5f);
+            cloud.scan_index.push_back(0);
+        }
+    }
+}
+
 // Calls visit(texel index, point) for every texel of `map`, baked at `probe`, whose ray meets
 // the plane x = probe.x + `wall_distance` at a point for which `on_it(point)` holds.
 template <class OnIt, class Visit>
@@ -960,19 +977,10 @@ TEST(ProbeBake, ASliverOnlyAFringeReachesIsTheFillsFirst) {
     PointCloud plate_only;
     add_wall_x(plate_only, 0.6f, 0.02f, 0.02f, 0.2f);
     PointCloud cloud = plate_only;
-    for (float y = -1.5f; y <= 1.5f; y += 0.01f) {
-        for (float z = -1.5f; z <= 1.5f; z += 0.01f) {
-            // Where the ray to (3, y, z) passes x = 0.6: the shadow lies beside the plate's
-            // sides, as a scanner beside the probe would leave it.
-            const float plate_y = std::abs(y) * 0.2f;
-            if (plate_y > 0.2f && plate_y < 0.23f && std::abs(z) * 0.2f <= 0.2f) {
-                continue;
-            }
-            cloud.positions.emplace_back(3.0f, y, z);
-            cloud.colors.emplace_back(0.5f);
-            cloud.scan_index.push_back(0);
-        }
-    }
+    // The shadow lies beside the plate's sides, as a scanner beside the probe would leave it.
+    add_far_wall_but(cloud, 1.5f, [](float plate_y, float plate_z) {
+        return std::abs(plate_y) > 0.2f && std::abs(plate_y) < 0.23f && std::abs(plate_z) <= 0.2f;
+    });
     for (PointCloud* c : {&plate_only, &cloud}) {
         c->scans.push_back(
             ScanSource{"plate and wall", c->positions.size(), glm::dvec3(0.0), true});
@@ -1041,23 +1049,13 @@ TEST(ProbeBake, AHoleARestoredSliverClosesOffIsFilledByASecondFill) {
     // off by them, and the second fill fills it.
     PointCloud cloud;
     add_wall_x(cloud, 0.6f, 0.02f, 0.02f, 0.2f);
-    for (float y = -1.5f; y <= 2.5f; y += 0.01f) {
-        for (float z = -1.5f; z <= 1.5f; z += 0.01f) {
-            const float plate_y = y * 0.2f; // where the ray to (3, y, z) passes x = 0.6
-            const float plate_z = z * 0.2f;
-            const bool shadow = plate_y > 0.2f && plate_y < 0.219f && std::abs(plate_z) <= 0.2f;
-            const bool narrow =
-                plate_y > 0.2f && plate_y < 0.24f && plate_z >= -0.12f && plate_z <= -0.08f;
-            const bool wide =
-                plate_y > 0.2f && plate_y < 0.4f && plate_z >= 0.04f && plate_z <= 0.2f;
-            if (shadow || narrow || wide) {
-                continue;
-            }
-            cloud.positions.emplace_back(3.0f, y, z);
-            cloud.colors.emplace_back(0.5f);
-            cloud.scan_index.push_back(0);
-        }
-    }
+    add_far_wall_but(cloud, 2.5f, [](float plate_y, float plate_z) {
+        const bool shadow = plate_y > 0.2f && plate_y < 0.219f && std::abs(plate_z) <= 0.2f;
+        const bool narrow =
+            plate_y > 0.2f && plate_y < 0.24f && plate_z >= -0.12f && plate_z <= -0.08f;
+        const bool wide = plate_y > 0.2f && plate_y < 0.4f && plate_z >= 0.04f && plate_z <= 0.2f;
+        return shadow || narrow || wide;
+    });
     cloud.scans.push_back(
         ScanSource{"plate and wall", cloud.positions.size(), glm::dvec3(0.0), true});
     const LocalGeometry geometry = estimate_local_geometry(cloud, {});
