@@ -30,6 +30,8 @@ constexpr char kKnownSpaceMagic[8] = {'L', 'F', 'P', 'K', 'N', 'O', 'W', 'N'};
 constexpr char kDirectionsMagic[8] = {'D', 'I', 'R', 'E', 'C', 'T', 'N', 'S'};
 // Voxel indices stay well inside int32 and a dense mask's arithmetic.
 constexpr double kMaxVoxelIndex = 1 << 28;
+// Rows of a probe's map whose surface voxels are gathered together (KnownSpace::add_probe).
+constexpr int kRowsPerSurfaceBand = 32;
 
 // A voxel or block index, each coordinate within `limit`.
 std::array<std::int32_t, 3> take_index(const std::string& in, std::size_t& at,
@@ -500,46 +502,118 @@ bool append_known_space(const std::string& set_folder, const std::string& probe_
     return true;
 }
 
+// A probe's surface voxels as its texels meet them, one entry a voxel: open addressing with
+// linear probing, grown at half full.
+class KnownSpace::VoxelTable {
+public:
+    VoxelTable() : slots_(kFirstSize, free_slot()) {}
+
+    // The voxel's entry, added with v's footprint when it is new. The reference holds until the
+    // next call.
+    SurfaceVoxel& find_or_add(const SurfaceVoxel& v) {
+        if (2 * (count_ + 1) > slots_.size()) {
+            grow();
+        }
+        std::size_t i = slot_of(v);
+        while (slots_[i].x != kFree) {
+            if (same_surface_voxel(slots_[i], v)) {
+                return slots_[i];
+            }
+            i = (i + 1) & (slots_.size() - 1);
+        }
+        ++count_;
+        slots_[i] = v;
+        return slots_[i];
+    }
+
+    [[nodiscard]] std::vector<SurfaceVoxel> entries() const {
+        std::vector<SurfaceVoxel> out;
+        out.reserve(count_);
+        std::copy_if(slots_.begin(), slots_.end(), std::back_inserter(out),
+                     [](const SurfaceVoxel& v) { return v.x != kFree; });
+        return out;
+    }
+
+private:
+    // Voxel indices lie within ±kMaxVoxelIndex: this is none.
+    static constexpr std::int32_t kFree = std::numeric_limits<std::int32_t>::min();
+    static constexpr std::size_t kFirstSize = 4096;
+
+    static SurfaceVoxel free_slot() { return {kFree, 0, 0, 0.0f}; }
+
+    [[nodiscard]] std::size_t slot_of(const SurfaceVoxel& v) const {
+        std::uint64_t h = static_cast<std::uint32_t>(v.x) * 0x9E3779B97F4A7C15ULL ^
+                          static_cast<std::uint32_t>(v.y) * 0xC2B2AE3D27D4EB4FULL ^
+                          static_cast<std::uint32_t>(v.z) * 0x165667B19E3779F9ULL;
+        h ^= h >> 32;
+        return static_cast<std::size_t>(h) & (slots_.size() - 1);
+    }
+
+    void grow() {
+        std::vector<SurfaceVoxel> old(2 * slots_.size(), free_slot());
+        old.swap(slots_);
+        for (const SurfaceVoxel& v : old) {
+            if (v.x != kFree) {
+                std::size_t i = slot_of(v);
+                while (slots_[i].x != kFree) {
+                    i = (i + 1) & (slots_.size() - 1);
+                }
+                slots_[i] = v;
+            }
+        }
+    }
+
+    std::vector<SurfaceVoxel> slots_;
+    std::size_t count_ = 0;
+};
+
 void KnownSpace::add_probe(const ProbeMap& map, std::size_t index) {
     const int n = map.resolution;
     const double footprint_per_metre = oct::kTexelAngleTimesN / n;
-    // Rows in parallel, each into its own list; the sort makes the order irrelevant.
-    std::vector<std::vector<SurfaceVoxel>> rows(static_cast<std::size_t>(n));
+    // Bands of rows in parallel, each keeping one entry a voxel (the largest footprint): a
+    // 2048² probe's texels fall in about 230,000 voxels, and an entry a texel run sorted
+    // afterwards (2.1 million) cost as much as writing the probe's EXR. The sort makes the
+    // bands' order irrelevant.
+    const int bands = (n + kRowsPerSurfaceBand - 1) / kRowsPerSurfaceBand;
+    std::vector<std::vector<SurfaceVoxel>> parts(static_cast<std::size_t>(bands));
     std::atomic<bool> empty{false};
     std::atomic<bool> too_far{false};
-    tbb::parallel_for(0, n, [&](int y) {
-        std::vector<SurfaceVoxel>& row = rows[static_cast<std::size_t>(y)];
-        for (int x = 0; x < n; ++x) {
-            if (empty.load(std::memory_order_relaxed)) {
-                return; // a probe with an empty texel is never asked about: nothing to keep
-            }
-            const oct::Texel texel{x, y};
-            const float d = map.distance_at(oct::texel_index(texel, n));
-            if (std::isnan(d)) {
-                continue;
-            }
-            if (std::isinf(d)) {
-                empty.store(true, std::memory_order_relaxed);
-                continue;
-            }
-            const glm::dvec3 p =
-                map.position + static_cast<double>(d) * glm::dvec3(oct::texel_direction(texel, n));
-            const glm::dvec3 u = glm::floor(p / kSurfaceVoxel);
-            if (!(std::abs(u.x) < kMaxVoxelIndex && std::abs(u.y) < kMaxVoxelIndex &&
-                  std::abs(u.z) < kMaxVoxelIndex)) {
-                too_far.store(true, std::memory_order_relaxed);
-                continue;
-            }
-            const SurfaceVoxel v{static_cast<std::int32_t>(u.x), static_cast<std::int32_t>(u.y),
-                                 static_cast<std::int32_t>(u.z),
-                                 static_cast<float>(d * footprint_per_metre)};
-            // Neighbouring texels mostly share a voxel: one entry, the larger footprint.
-            if (!row.empty() && same_surface_voxel(row.back(), v)) {
-                row.back().footprint = std::max(row.back().footprint, v.footprint);
-            } else {
-                row.push_back(v);
+    tbb::parallel_for(0, bands, [&](int band) {
+        VoxelTable voxels;
+        const int y1 = std::min(n, (band + 1) * kRowsPerSurfaceBand);
+        for (int y = band * kRowsPerSurfaceBand; y < y1; ++y) {
+            SurfaceVoxel* last = nullptr; // neighbouring texels mostly share a voxel
+            for (int x = 0; x < n; ++x) {
+                if (empty.load(std::memory_order_relaxed)) {
+                    return; // a probe with an empty texel is never asked about: nothing to keep
+                }
+                const oct::Texel texel{x, y};
+                const float d = map.distance_at(oct::texel_index(texel, n));
+                if (std::isnan(d)) {
+                    continue;
+                }
+                if (std::isinf(d)) {
+                    empty.store(true, std::memory_order_relaxed);
+                    continue;
+                }
+                const glm::dvec3 p = map.position + static_cast<double>(d) *
+                                                        glm::dvec3(oct::texel_direction(texel, n));
+                const glm::dvec3 u = glm::floor(p / kSurfaceVoxel);
+                if (!(std::abs(u.x) < kMaxVoxelIndex && std::abs(u.y) < kMaxVoxelIndex &&
+                      std::abs(u.z) < kMaxVoxelIndex)) {
+                    too_far.store(true, std::memory_order_relaxed);
+                    continue;
+                }
+                const SurfaceVoxel v{static_cast<std::int32_t>(u.x), static_cast<std::int32_t>(u.y),
+                                     static_cast<std::int32_t>(u.z),
+                                     static_cast<float>(d * footprint_per_metre)};
+                if (last == nullptr || !same_surface_voxel(*last, v)) {
+                    last = &voxels.find_or_add(v);
+                }
+                last->footprint = std::max(last->footprint, v.footprint);
             }
         }
+        parts[static_cast<std::size_t>(band)] = voxels.entries();
     });
     KnownSpace probe;
     if (empty.load()) {
@@ -555,17 +629,17 @@ void KnownSpace::add_probe(const ProbeMap& map, std::size_t index) {
                          " lies too far out for voxels of " + std::to_string(kSurfaceVoxel) + " m");
     }
     std::size_t total = 0;
-    for (const auto& row : rows) {
-        total += row.size();
+    for (const auto& part : parts) {
+        total += part.size();
     }
     probe.surfaces_.reserve(total);
-    for (auto& row : rows) {
-        for (const SurfaceVoxel& v : row) {
+    for (auto& part : parts) {
+        for (const SurfaceVoxel& v : part) {
             probe.farthest_ =
                 std::max(probe.farthest_, static_cast<double>(v.footprint) / footprint_per_metre);
         }
-        probe.surfaces_.insert(probe.surfaces_.end(), row.begin(), row.end());
-        std::vector<SurfaceVoxel>().swap(row);
+        probe.surfaces_.insert(probe.surfaces_.end(), part.begin(), part.end());
+        std::vector<SurfaceVoxel>().swap(part);
     }
     SeenVoxels seen;
     SeenDirections directions;

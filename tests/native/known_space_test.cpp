@@ -7,12 +7,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <random>
+#include <set>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include "lfprobe/error.hpp"
 #include "lfprobe/known_space.hpp"
@@ -207,6 +209,48 @@ TEST(KnownSpace, ARebuildInAnyOrderIsBitIdenticalAndTheFileRoundTrips) {
         scenes::write_file(path, damaged);
         EXPECT_THROW((void)KnownSpace::read(path), InputError) << damaged.size();
     }
+}
+
+// A probe's surfaces are one entry a voxel whatever its texels' order: a 128² probe of the box
+// room puts about as many voxels in a band of rows as texels (the band's table grows), and the
+// count and the farthest footprint are those of every known texel's own voxel, counted one by
+// one; the same on 1 and 2 threads.
+TEST(KnownSpace, EachSurfaceVoxelIsKeptOnceWithItsLargestFootprint) {
+    const BoxRoomScene room = BoxRoomScene{};
+    const int n = 128;
+    ProbeMap map = scenes::analytic_probe(room, {-0.3, 0.2, 1.2}, n);
+    for (int y = n / 5; y < n / 2; ++y) {
+        for (int x = n / 3; x < n / 2; ++x) {
+            map.set_unknown(oct::texel_index({x, y}, n)); // texels with nothing to add
+        }
+    }
+    std::set<std::array<std::int64_t, 3>> voxels;
+    double farthest = 0.0;
+    for (int y = 0; y < n; ++y) {
+        for (int x = 0; x < n; ++x) {
+            const float d = map.distance_at(oct::texel_index({x, y}, n));
+            if (!std::isfinite(d)) {
+                continue;
+            }
+            const glm::dvec3 p =
+                map.position + static_cast<double>(d) * glm::dvec3(oct::texel_direction({x, y}, n));
+            const glm::dvec3 u = glm::floor(p / KnownSpace::kSurfaceVoxel);
+            voxels.insert({static_cast<std::int64_t>(u.x), static_cast<std::int64_t>(u.y),
+                           static_cast<std::int64_t>(u.z)});
+            const double footprint_per_metre = oct::kTexelAngleTimesN / n;
+            farthest = std::max(farthest,
+                                static_cast<double>(static_cast<float>(d * footprint_per_metre)) /
+                                    footprint_per_metre);
+        }
+    }
+    ASSERT_GT(voxels.size(), std::size_t{8000}); // more than the tables' first 2048 a band
+    KnownSpace one_thread;
+    tbb::task_arena(1).execute([&] { one_thread.add_probe(map, 0); });
+    KnownSpace two_threads;
+    tbb::task_arena(2).execute([&] { two_threads.add_probe(map, 0); });
+    EXPECT_EQ(one_thread.surface_voxel_count(), voxels.size());
+    EXPECT_EQ(one_thread.farthest_distance(), farthest);
+    EXPECT_TRUE(one_thread == two_threads);
 }
 
 // A probe's known directions (a bit per texel, the farthest distance per block) pass a ray over

@@ -247,6 +247,7 @@ private:
     };
     static bool surface_order(const SurfaceVoxel& a, const SurfaceVoxel& b);
     static bool same_surface_voxel(const SurfaceVoxel& a, const SurfaceVoxel& b);
+    class VoxelTable; // one entry a voxel while a probe is added
     void normalise();
 
     bool has_empty_ = false;
