@@ -514,16 +514,12 @@ public:
         if (2 * (count_ + 1) > slots_.size()) {
             grow();
         }
-        std::size_t i = slot_of(v);
-        while (slots_[i].x != kFree) {
-            if (same_surface_voxel(slots_[i], v)) {
-                return slots_[i];
-            }
-            i = (i + 1) & (slots_.size() - 1);
+        SurfaceVoxel& slot = slots_[place_of(v)];
+        if (slot.x == kFree) {
+            ++count_;
+            slot = v;
         }
-        ++count_;
-        slots_[i] = v;
-        return slots_[i];
+        return slot;
     }
 
     [[nodiscard]] std::vector<SurfaceVoxel> entries() const {
@@ -541,12 +537,17 @@ private:
 
     static SurfaceVoxel free_slot() { return {kFree, 0, 0, 0.0f}; }
 
-    [[nodiscard]] std::size_t slot_of(const SurfaceVoxel& v) const {
+    // The slot holding v's voxel, or the free slot where it goes.
+    [[nodiscard]] std::size_t place_of(const SurfaceVoxel& v) const {
         std::uint64_t h = static_cast<std::uint32_t>(v.x) * 0x9E3779B97F4A7C15ULL ^
                           static_cast<std::uint32_t>(v.y) * 0xC2B2AE3D27D4EB4FULL ^
                           static_cast<std::uint32_t>(v.z) * 0x165667B19E3779F9ULL;
         h ^= h >> 32;
-        return static_cast<std::size_t>(h) & (slots_.size() - 1);
+        std::size_t i = static_cast<std::size_t>(h) & (slots_.size() - 1);
+        while (slots_[i].x != kFree && !same_surface_voxel(slots_[i], v)) {
+            i = (i + 1) & (slots_.size() - 1);
+        }
+        return i;
     }
 
     void grow() {
@@ -554,11 +555,7 @@ private:
         old.swap(slots_);
         for (const SurfaceVoxel& v : old) {
             if (v.x != kFree) {
-                std::size_t i = slot_of(v);
-                while (slots_[i].x != kFree) {
-                    i = (i + 1) & (slots_.size() - 1);
-                }
-                slots_[i] = v;
+                slots_[place_of(v)] = v;
             }
         }
     }

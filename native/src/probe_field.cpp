@@ -154,16 +154,16 @@ struct FieldQuery {
         if (result.probes_tried < 2) {
             return false; // a ray one of the first probes answers never pays for the walk below
         }
-        if (start_near_surface()) {
-            // A surface voxel holds where the ray now starts, and the probes proved the ray free
-            // up to there: the last surface voxel before the first point no probe saw lies at or
-            // past the start, and the walk below would not stop the ray. (Were a point before the
-            // start unseen after all, asking on costs asks, never an answer.) Most rays of a
-            // complete scan that a third probe answers then never walk: the bench room's view
-            // between probes 180-183 ms a frame against 193-202 ms, the same images.
-            return false;
-        }
         if (std::isnan(last_surface_t)) {
+            if (start_near_surface()) {
+                // A surface voxel holds where the ray now starts, and the probes proved the ray
+                // free up to there: the last one before the first point no probe saw lies at or
+                // past the start, and the walk below would not stop the ray now. (Were a point
+                // before the start unseen after all, asking on costs asks, never an answer.)
+                // Most rays of a complete scan that a third probe answers then never walk: the
+                // bench room's view between probes 180-183 ms a frame against 193-202 ms.
+                return false;
+            }
             // Past the first point no probe saw and no surface holds, none can answer either:
             // the last surface voxel before it bounds where a later probe can meet one.
             last_surface_t = known->last_surface_t(
