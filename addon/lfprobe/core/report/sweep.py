@@ -202,7 +202,7 @@ class Sweep:
         setups: List[Tuple[ProbeSetup, List]] = []
         for density in self.densities:
             for res in p.fine_resolutions:
-                if density is not densest and p.coarse_scans_at_reference_only and res != reference_res:
+                if density is not densest and p.coarse_scan_resolution not in (None, res):
                     continue
                 for variant in p.bake_variants:
                     setup = ProbeSetup("scan", res, full_grid[2], full_grid[0], full_grid[1], variant, density)
