@@ -336,19 +336,20 @@ def main(args) -> int:
         pump = os.path.abspath(SHARED_PUMP_XYZ)
         if os.path.isfile(pump):
             rows.append(parse_benchmark(pump, "pumpA_xyzrgb.xyz (real scan)", tmp, 3))
-        generated = os.path.join(tmp, "room.xyz")
-        positions, colors = room_cloud(args.parse_points, seed=2)
-        srgb = np.clip(np.round(255 * np.power(colors, 1 / 2.2)), 0, 255).astype(np.uint8)
-        write_xyz(generated, positions, srgb)
-        del positions, colors, srgb
-        # Written back before the timing: the file is then read from a warm page cache, not
-        # beside the kernel's writeback of it (which takes one of the two cores for a while).
-        descriptor = os.open(generated, os.O_RDONLY)
-        try:
-            os.fsync(descriptor)
-        finally:
-            os.close(descriptor)
-        rows.append(parse_benchmark(generated, f"generated room, {args.parse_points:,} points", tmp, 1))
+        if args.parse_points > 0:
+            generated = os.path.join(tmp, "room.xyz")
+            positions, colors = room_cloud(args.parse_points, seed=2)
+            srgb = np.clip(np.round(255 * np.power(colors, 1 / 2.2)), 0, 255).astype(np.uint8)
+            write_xyz(generated, positions, srgb)
+            del positions, colors, srgb
+            # Written back before the timing: the file is then read from a warm page cache, not
+            # beside the kernel's writeback of it (which takes one of the two cores for a while).
+            descriptor = os.open(generated, os.O_RDONLY)
+            try:
+                os.fsync(descriptor)
+            finally:
+                os.close(descriptor)
+            rows.append(parse_benchmark(generated, f"generated room, {args.parse_points:,} points", tmp, 1))
         for r in rows:
             print(
                 f"{r['file']}: {r['bytes'] / 1e6:.1f} MB, {r['points']:,} points\n"
@@ -358,7 +359,6 @@ def main(args) -> int:
                 f"  native is {r['speedup_vs_loadtxt']:.1f}× faster than numpy.loadtxt"
             )
         results["parsing"] = rows
-        os.remove(generated)
 
         if args.scan_points > 0:
             print(f"\n== a simulated scan of about {args.scan_points:,} points (28 M: a station at the "

@@ -432,7 +432,7 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--res", type=int, default=None,
                        help="probe resolution (default: 2048 for core, 1024 for render)")
     bench.add_argument("--parse-points", type=int, default=2_000_000,
-                       help="points in the generated file for the parsing comparison")
+                       help="points in the generated file for the parsing comparison (0: skip)")
     bench.add_argument("--splat-points", default="1000000,10000000,30000000",
                        help="render: cloud sizes for the splatting comparison")
     bench.add_argument("--scan-points", type=int, default=28_000_000,
