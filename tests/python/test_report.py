@@ -415,3 +415,30 @@ def test_pareto_front():
             {"ms": 4.0, "q": 30.0}, {"ms": 1.0, "q": 20.0 - 1e-9}]
     assert pareto_front(rows, "ms", "q") == [0, 1, 4]
     assert pareto_front(rows, "ms", "q", higher_is_better=False) == [5]
+
+
+def test_coarser_scans_are_baked_at_the_presets_coarse_scan_resolution_alone():
+    """The demo preset bakes its 1° scans at 1024² only (at 2048² the bake is every texel's work
+    for few points); a preset without coarse_scan_resolution bakes every density at every fine
+    resolution; the densest scan always gets every resolution and the reference's trace settings."""
+    import dataclasses
+
+    from lfprobe.core.report.presets import DEFAULT_TRACE, get_preset
+    from lfprobe.core.report.sweep import Density, planned_setups
+
+    densities = [Density(0.1, 21_600_004, 0.0, None), Density(1.0, 216_004, 0.0, None)]
+    grid = ([0.0, 0.0, 0.0], [1.0, 2.0, 1.0], [3, 5, 2])
+
+    def scan_sets(preset):
+        setups = planned_setups(preset, densities, grid, lambda factor: grid)
+        return [(s.density.step_deg, s.resolution, len(traces)) for s, traces in setups if s.source == "scan"]
+
+    demo = get_preset("demo")
+    # the reference (0.1°, 2048²): the default, the paper's trace and compact storage
+    assert scan_sets(demo) == [(0.1, 1024, 1), (0.1, 2048, 3), (1.0, 1024, 1)]
+    every = dataclasses.replace(demo, coarse_scan_resolution=None)
+    assert scan_sets(every) == [(0.1, 1024, 1), (0.1, 2048, 3), (1.0, 1024, 1), (1.0, 2048, 1)]
+    mesh = [s for s, _ in planned_setups(demo, densities, grid, lambda factor: grid) if s.source == "mesh"]
+    assert [s.resolution for s in mesh] == [1024]
+    reference = planned_setups(demo, densities, grid, lambda factor: grid)[1][1]
+    assert reference[0] == DEFAULT_TRACE and len(demo.trace_variants) == 2

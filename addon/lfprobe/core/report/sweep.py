@@ -159,6 +159,38 @@ def setting_label(row: Dict[str, object]) -> str:
     return f"{setup_label(row)}, {row['trace']}"
 
 
+def planned_setups(p, densities: Sequence[Density], full_grid: Tuple[List[float], List[float], List[int]],
+                   scaled) -> List[Tuple[ProbeSetup, List]]:
+    """The probe sets the sweep bakes, each with the trace settings it is rendered with, for the
+    preset `p`: scan sets of every density (densest first) at the fine resolutions (a coarser
+    density at p.coarse_scan_resolution alone where set), the probe counts of p.count_factors
+    (scaled(factor): that grid), then the mesh-baked sets."""
+    densest = densities[0]
+    reference_res = p.reference_fine_resolution()
+    setups: List[Tuple[ProbeSetup, List]] = []
+    for density in densities:
+        for res in p.fine_resolutions:
+            if density is not densest and p.coarse_scan_resolution not in (None, res):
+                continue
+            for variant in p.bake_variants:
+                setup = ProbeSetup("scan", res, full_grid[2], full_grid[0], full_grid[1], variant, density)
+                is_reference = density is densest and res == reference_res and variant == "splat + fill"
+                traces = list(p.trace_variants) if is_reference else [DEFAULT_TRACE]
+                # Compact storage beside full: at every resolution for the storage comparison
+                # of "planning", at the reference alone when the preset skips planning.
+                if density is densest and variant == "splat + fill" and (p.planning or res == reference_res):
+                    traces.append(COMPACT_TRACE)
+                setups.append((setup, traces))
+    for factor in p.count_factors:
+        if factor != 1.0:
+            lo, hi, counts = scaled(factor)
+            setups.append((ProbeSetup("scan", reference_res, counts, lo, hi, "splat + fill", densest),
+                           [DEFAULT_TRACE]))
+    for res in p.mesh_grid_resolutions or p.fine_resolutions:
+        setups.append((ProbeSetup("mesh", res, full_grid[2], full_grid[0], full_grid[1]), [DEFAULT_TRACE]))
+    return setups
+
+
 class Sweep:
     """Runs the sweep and holds its rows and the images the report shows."""
 
@@ -199,28 +231,7 @@ class Sweep:
         densest = self.densities[0]
         reference_res = p.reference_fine_resolution()
         full_grid = scaled_grid(ctx, 1.0)
-        setups: List[Tuple[ProbeSetup, List]] = []
-        for density in self.densities:
-            for res in p.fine_resolutions:
-                if density is not densest and p.coarse_scan_resolution not in (None, res):
-                    continue
-                for variant in p.bake_variants:
-                    setup = ProbeSetup("scan", res, full_grid[2], full_grid[0], full_grid[1], variant, density)
-                    is_reference = density is densest and res == reference_res and variant == "splat + fill"
-                    traces = list(p.trace_variants) if is_reference else [DEFAULT_TRACE]
-                    # Compact storage beside full: at every resolution for the storage comparison
-                    # of "planning", at the reference alone when the preset skips planning.
-                    if density is densest and variant == "splat + fill" and (p.planning or res == reference_res):
-                        traces.append(COMPACT_TRACE)
-                    setups.append((setup, traces))
-        for factor in p.count_factors:
-            if factor != 1.0:
-                lo, hi, counts = scaled_grid(ctx, factor)
-                setups.append((ProbeSetup("scan", reference_res, counts, lo, hi, "splat + fill", densest),
-                               [DEFAULT_TRACE]))
-        for res in p.mesh_grid_resolutions or p.fine_resolutions:
-            setups.append((ProbeSetup("mesh", res, full_grid[2], full_grid[0], full_grid[1]), [DEFAULT_TRACE]))
-
+        setups = planned_setups(p, self.densities, full_grid, lambda factor: scaled_grid(ctx, factor))
         for index, (setup, traces) in enumerate(setups):
             folder = ctx.work_path("probes", f"set_{index:03d}")
             info = bake(ctx, setup, folder)
