@@ -160,8 +160,7 @@ struct FieldQuery {
                 // free up to there: the last one before the first point no probe saw lies at or
                 // past the start, and the walk below would not stop the ray now. (Were a point
                 // before the start unseen after all, asking on costs asks, never an answer.)
-                // Most rays of a complete scan that a third probe answers then never walk: the
-                // bench room's view between probes 180-183 ms a frame against 193-202 ms.
+                // Most rays of a complete scan that a third probe answers then never walk.
                 return false;
             }
             // Past the first point no probe saw and no surface holds, none can answer either:

@@ -1,7 +1,7 @@
 """What each report preset sweeps. `tiny` runs in the tests (well under a minute); `demo` is the
 demo's report at the paper's scan density (scans at 0.1°, views 640 pixels wide, probes up to
-2048²: the report about 10 minutes on 2 cores for the lab room), measuring few settings; `full` is the benchmark
-sweep (every setting, and the section "Model only what a scene needs")."""
+2048²: the report about 7 minutes on 2 cores for the lab room), measuring few settings; `full`
+is the benchmark sweep (every setting, and the section "Model only what a scene needs")."""
 
 from __future__ import annotations
 
